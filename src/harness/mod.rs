@@ -1,0 +1,420 @@
+//! # The shared harness
+//!
+//! One harness proves every evaluator right and measures how fast it is. It
+//! takes the implementation under test as a parameter (anything that
+//! implements [`Kernel`]) and runs a seeded [`Campaign`]:
+//!
+//! - **throughput**: every sample through [`Kernel::evaluate_batch`] on one
+//!   thread, in samples per second;
+//! - **oracle**: a share of the samples against the brute-force
+//!   [`oracle::brute_force`], counting per order the distances that differ by
+//!   more than the kernel's [`Kernel::error_bound`] and the IDs that differ
+//!   where the distance is not a tie;
+//! - **continuity**: pairs of points straddling cell faces, edges and corners
+//!   (and pairs one ulp apart on exact lattice planes); F_k is 1-Lipschitz in
+//!   its own metric, so a pair is a violation when |F_k(a) − F_k(b)| exceeds
+//!   the metric distance between a and b plus both error bounds;
+//! - **statistics**: mean F1, the Kolmogorov–Smirnov distance between the
+//!   sampled F1 and the Poisson law P(F1 > r) = exp(−ρ·V·r^d), and the grid
+//!   bias (mean F1 at cell centres over mean F1 at cell corners, minus one).
+//!
+//! Samples are drawn from a counter-based generator, so every figure is
+//! reproducible from the campaign's seed, and the parallel parts give the
+//! same counts on any number of threads.
+
+pub mod oracle;
+pub mod report;
+
+use std::time::Instant;
+
+use crate::config::{Config, Mode};
+use crate::definition::{splitmix64, Pattern};
+use crate::reference::{outside_distance, Features, Reference};
+
+pub use report::{OrderReport, Report};
+
+/// An evaluator under test.
+pub trait Kernel<const D: usize>: Sync {
+    /// A short name for reports.
+    fn name(&self) -> String;
+    /// The configuration it was built from.
+    fn config(&self) -> &Config;
+    /// Its point set.
+    fn pattern(&self) -> &Pattern<D>;
+    /// F1..Fn at one point.
+    fn evaluate(&self, x: [f64; D]) -> Features<D>;
+    /// F1..Fn at many points (the throughput path); `out.len() == xs.len()`.
+    fn evaluate_batch(&self, xs: &[[f64; D]], out: &mut [Features<D>]) {
+        for (x, o) in xs.iter().zip(out.iter_mut()) {
+            *o = self.evaluate(*x);
+        }
+    }
+    /// The largest |F_k(kernel) − F_k(exact)| the kernel claims at a sample
+    /// whose largest |coordinate| is `magnitude` and whose F_k is `f`,
+    /// counting the rounding of x·S as part of the error.
+    fn error_bound(&self, magnitude: f64, f: f64) -> f64;
+}
+
+impl<const D: usize> Kernel<D> for Reference<D> {
+    fn name(&self) -> String {
+        "reference-f64".into()
+    }
+    fn config(&self) -> &Config {
+        Reference::config(self)
+    }
+    fn pattern(&self) -> &Pattern<D> {
+        Reference::pattern(self)
+    }
+    fn evaluate(&self, x: [f64; D]) -> Features<D> {
+        Reference::evaluate(self, x)
+    }
+    /// A few ulps of the distance, plus the rounding of x·S (half an ulp of
+    /// the coordinate per axis, so at most √d·ulp(|x|) in any Lp metric).
+    fn error_bound(&self, magnitude: f64, f: f64) -> f64 {
+        8.0 * f64::EPSILON * (f + 2.0 * magnitude + 1.0)
+    }
+}
+
+/// A seeded test campaign.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Campaign {
+    /// Seed of the sample generator (not of the pattern).
+    pub seed: u64,
+    /// Random samples for throughput and statistics.
+    pub samples: usize,
+    /// Of those, how many are checked against the brute-force oracle.
+    pub oracle_samples: usize,
+    /// Samples are uniform in [−range, range]^d (user units).
+    pub range: f64,
+    /// Straddling pairs for the continuity check.
+    pub pairs: usize,
+    /// Cells sampled at centre and corner for the grid bias.
+    pub grid_cells: usize,
+}
+
+impl Default for Campaign {
+    fn default() -> Self {
+        Campaign {
+            seed: 1,
+            samples: 1_000_000,
+            oracle_samples: 200_000,
+            range: 1000.0,
+            pairs: 200_000,
+            grid_cells: 1_000_000,
+        }
+    }
+}
+
+/// A uniform f64 in [0, 1) from a seed and a counter (SplitMix64 twice).
+#[inline]
+pub fn uniform(seed: u64, counter: u64) -> f64 {
+    (splitmix64(seed ^ splitmix64(counter)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// Sample i of a campaign: uniform in [−range, range]^d.
+#[inline]
+pub fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
+    std::array::from_fn(|a| (2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * range)
+}
+
+/// Runs `f` over `0..n` in chunks, on all cores with the `parallel`
+/// feature, and returns the chunks' results in order.
+pub fn chunked<A: Send>(n: usize, f: impl Fn(std::ops::Range<usize>) -> A + Sync + Send) -> Vec<A> {
+    const CHUNK: usize = 4096;
+    let chunks = n.div_ceil(CHUNK);
+    let range = move |c: usize| c * CHUNK..((c + 1) * CHUNK).min(n);
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        (0..chunks).into_par_iter().map(|c| f(range(c))).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        (0..chunks).map(|c| f(range(c))).collect()
+    }
+}
+
+/// Runs the whole campaign against `kernel`.
+pub fn run<const D: usize, K: Kernel<D>>(kernel: &K, campaign: &Campaign) -> Report {
+    let config = *kernel.config();
+    let mut report = Report::new::<D>(kernel.name(), &config, kernel.pattern(), campaign);
+    throughput_and_statistics(kernel, campaign, &mut report);
+    compare_with_oracle(kernel, campaign, &mut report);
+    continuity(kernel, campaign, &mut report);
+    report.grid_bias = grid_bias(kernel, campaign);
+    report
+}
+
+/// Throughput on one thread; mean F1, KS distance and widening from the same
+/// evaluations.
+pub fn throughput_and_statistics<const D: usize, K: Kernel<D>>(
+    kernel: &K,
+    campaign: &Campaign,
+    report: &mut Report,
+) {
+    const BATCH: usize = 1024;
+    let order = kernel.config().order;
+    let mut points = vec![[0.0; D]; BATCH];
+    let mut out = vec![Features::<D>::empty(order); BATCH];
+    let mut f1 = Vec::with_capacity(campaign.samples);
+    let mut widened = 0usize;
+    let mut max_shells = 0u32;
+    let mut seconds = 0.0;
+    let mut start = 0;
+    while start < campaign.samples {
+        let n = BATCH.min(campaign.samples - start);
+        for (i, p) in points[..n].iter_mut().enumerate() {
+            *p = sample_point(campaign.seed, start + i, campaign.range);
+        }
+        let t = Instant::now();
+        kernel.evaluate_batch(&points[..n], &mut out[..n]);
+        seconds += t.elapsed().as_secs_f64();
+        for o in &out[..n] {
+            f1.push(o.distance[0]);
+            widened += (o.shells > 1) as usize;
+            max_shells = max_shells.max(o.shells);
+        }
+        start += n;
+    }
+    report.throughput = campaign.samples as f64 / seconds.max(1e-12);
+    report.widened = widened as f64 / campaign.samples.max(1) as f64;
+    report.max_shells = max_shells;
+    report.mean_f1 = f1.iter().sum::<f64>() / f1.len().max(1) as f64;
+    let config = kernel.config();
+    let rho_v = kernel.pattern().user_density() * config.metric.unit_ball_volume(D);
+    report.ks = ks_distance(&mut f1, |r| 1.0 - (-rho_v * r.powi(D as i32)).exp());
+}
+
+/// The Kolmogorov–Smirnov distance between the sample and a CDF.
+pub fn ks_distance(sample: &mut [f64], cdf: impl Fn(f64) -> f64) -> f64 {
+    sample.sort_by(|a, b| a.total_cmp(b));
+    let n = sample.len() as f64;
+    let mut d: f64 = 0.0;
+    for (i, &r) in sample.iter().enumerate() {
+        let g = cdf(r);
+        d = d.max((i as f64 + 1.0) / n - g).max(g - i as f64 / n);
+    }
+    d
+}
+
+/// Oracle agreement per order, and per order the fraction of samples whose
+/// exact F_k lies beyond the 3^d block's outside (those need a wider search).
+pub fn compare_with_oracle<const D: usize, K: Kernel<D>>(
+    kernel: &K,
+    campaign: &Campaign,
+    report: &mut Report,
+) {
+    let config = *kernel.config();
+    let order = config.order;
+    let pattern = kernel.pattern();
+    let parts = chunked(campaign.oracle_samples, |range| {
+        let mut part = vec![OrderReport::default(); order];
+        let mut scratch = Vec::new();
+        for i in range {
+            let x = sample_point::<D>(campaign.seed, i, campaign.range);
+            let got = kernel.evaluate(x);
+            let want = oracle::brute_force(pattern, config.metric, order, x, &mut scratch);
+            let magnitude = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let f = pattern.locate(x).map(|(_, f)| f).unwrap_or([0.0; D]);
+            let block_edge = outside_distance(&f, 1) / pattern.scale();
+            for k in 0..order {
+                let p = &mut part[k];
+                let tol = kernel.error_bound(magnitude, want.distance[k]);
+                let err = (got.distance[k] - want.distance[k]).abs();
+                let wrong = !(err <= tol); // NaN or ∞ counts as wrong
+                p.oracle_disagreements += wrong as u64;
+                if !wrong {
+                    p.max_error = p.max_error.max(err);
+                }
+                let tied = (k > 0 && want.distance[k] - want.distance[k - 1] <= 2.0 * tol)
+                    || (k + 1 < order && want.distance[k + 1] - want.distance[k] <= 2.0 * tol);
+                p.id_disagreements += (!wrong && !tied && got.id[k] != want.id[k]) as u64;
+                p.needs_wider += (want.distance[k] > block_edge) as u64;
+            }
+        }
+        part
+    });
+    for part in parts {
+        for (total, p) in report.orders.iter_mut().zip(part) {
+            total.oracle_disagreements += p.oracle_disagreements;
+            total.id_disagreements += p.id_disagreements;
+            total.needs_wider += p.needs_wider;
+            total.max_error = total.max_error.max(p.max_error);
+        }
+    }
+}
+
+/// A user coordinate x with x·S exactly the integer `k`, if one exists near
+/// k/S.
+pub fn lattice_coordinate(k: i64, scale: f64) -> Option<f64> {
+    let mut x = k as f64 / scale;
+    for _ in 0..4 {
+        let u = x * scale;
+        if u == k as f64 {
+            return Some(x);
+        }
+        x = if u < k as f64 {
+            x.next_up()
+        } else {
+            x.next_down()
+        };
+    }
+    None
+}
+
+/// Straddling pairs: faces, edges and corners (and, every fourth pair,
+/// a point exactly on a lattice plane against its neighbour one ulp below).
+pub fn continuity<const D: usize, K: Kernel<D>>(
+    kernel: &K,
+    campaign: &Campaign,
+    report: &mut Report,
+) {
+    let config = *kernel.config();
+    let order = config.order;
+    let pattern = kernel.pattern();
+    let scale = pattern.scale();
+    let cells = (campaign.range * scale).floor().max(1.0);
+    let seed = campaign.seed ^ 0xC0_17_1A_17;
+    let parts = chunked(campaign.pairs, |range| {
+        let mut part = (vec![OrderReport::default(); order], 0u64);
+        for i in range {
+            let rnd = |j: u64| uniform(seed, i as u64 * 64 + j);
+            // Which axes sit on a lattice plane: 1 (face) ..= D (corner).
+            let on_lattice = 1 + i % D;
+            let mut axes: [usize; D] = std::array::from_fn(|a| a);
+            for a in (1..D).rev() {
+                axes.swap(a, (rnd(40 + a as u64) * (a + 1) as f64) as usize);
+            }
+            let (xa, xb) = if i % 4 == 3 {
+                // Exactly on the plane of axis axes[0], and one ulp below.
+                let mut xa = [0.0; D];
+                for a in 0..D {
+                    xa[a] = (2.0 * rnd(a as u64) - 1.0) * campaign.range;
+                }
+                let k = ((2.0 * rnd(20) - 1.0) * cells).floor() as i64;
+                let Some(x) = lattice_coordinate(k, scale) else {
+                    continue;
+                };
+                xa[axes[0]] = x;
+                let mut xb = xa;
+                xb[axes[0]] = x.next_down();
+                (xa, xb)
+            } else {
+                let eps = 10f64.powf(-9.0 + 6.0 * rnd(30));
+                let mut ua = [0.0; D];
+                let mut ub = [0.0; D];
+                for (rank, &a) in axes.iter().enumerate() {
+                    let c = ((2.0 * rnd(a as u64) - 1.0) * cells).floor();
+                    let (u, e) = if rank < on_lattice {
+                        let sign = if rnd(10 + a as u64) < 0.5 { -1.0 } else { 1.0 };
+                        (c, sign * (0.1 + 0.9 * rnd(20 + a as u64)))
+                    } else {
+                        (c + rnd(50 + a as u64), 2.0 * rnd(20 + a as u64) - 1.0)
+                    };
+                    ua[a] = (u - eps * e) / scale;
+                    ub[a] = (u + eps * e) / scale;
+                }
+                (ua, ub)
+            };
+            let (Some((ca, _)), Some((cb, _))) = (pattern.locate(xa), pattern.locate(xb)) else {
+                continue;
+            };
+            part.1 += (ca != cb) as u64;
+            let fa = kernel.evaluate(xa);
+            let fb = kernel.evaluate(xb);
+            let diff: [f64; D] = std::array::from_fn(|a| xa[a] - xb[a]);
+            let dist = config.metric.distance(&diff);
+            let magnitude = xa.iter().chain(&xb).fold(0.0f64, |m, v| m.max(v.abs()));
+            for k in 0..order {
+                let bound = dist
+                    + kernel.error_bound(magnitude, fa.distance[k])
+                    + kernel.error_bound(magnitude, fb.distance[k]);
+                let jump = (fa.distance[k] - fb.distance[k]).abs();
+                let p = &mut part.0[k];
+                if !(jump <= bound) {
+                    p.continuity_violations += 1;
+                    p.max_excess = p.max_excess.max(if jump.is_finite() {
+                        jump - dist
+                    } else {
+                        f64::INFINITY
+                    });
+                }
+            }
+        }
+        part
+    });
+    report.pairs = campaign.pairs as u64;
+    for (orders, straddled) in parts {
+        report.straddled += straddled;
+        for (total, p) in report.orders.iter_mut().zip(orders) {
+            total.continuity_violations += p.continuity_violations;
+            total.max_excess = total.max_excess.max(p.max_excess);
+        }
+    }
+}
+
+/// Mean F1 at cell centres over mean F1 at cell corners, minus one.
+pub fn grid_bias<const D: usize, K: Kernel<D>>(kernel: &K, campaign: &Campaign) -> f64 {
+    let scale = kernel.pattern().scale();
+    let cells = (campaign.range * scale).floor().max(1.0);
+    let seed = campaign.seed ^ 0x6121_D0B1_A5ED;
+    let parts = chunked(campaign.grid_cells, |range| {
+        let (mut centre, mut corner) = (0.0, 0.0);
+        for i in range {
+            let c: [f64; D] = std::array::from_fn(|a| {
+                ((2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * cells).floor()
+            });
+            centre += kernel.evaluate(c.map(|v| (v + 0.5) / scale)).distance[0];
+            corner += kernel.evaluate(c.map(|v| v / scale)).distance[0];
+        }
+        (centre, corner)
+    });
+    let (centre, corner) = parts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
+    centre / corner - 1.0
+}
+
+/// Builds the window-mode twin of a configuration (for wrong-rate tables).
+pub fn window_of(config: Config) -> Config {
+    Config {
+        mode: Mode::Window,
+        ..config
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ks_distance_of_a_perfect_sample_is_one_over_n() {
+        let mut s: Vec<f64> = (0..1000).map(|i| (i as f64 + 0.5) / 1000.0).collect();
+        let d = ks_distance(&mut s, |r| r.clamp(0.0, 1.0));
+        assert!((d - 0.0005).abs() < 1e-12, "{d}");
+        // A shifted sample is detected.
+        let mut t: Vec<f64> = (0..1000).map(|i| (i as f64 + 0.5) / 1000.0 * 0.9).collect();
+        assert!(ks_distance(&mut t, |r| r.clamp(0.0, 1.0)) > 0.09);
+    }
+
+    #[test]
+    fn lattice_coordinates_land_on_the_lattice() {
+        let scale = 0.4123456789;
+        let mut found = 0;
+        for k in -1000..1000 {
+            if let Some(x) = lattice_coordinate(k, scale) {
+                assert_eq!(x * scale, k as f64);
+                found += 1;
+            }
+        }
+        assert!(found > 1900, "{found}");
+    }
+
+    #[test]
+    fn uniform_is_in_range_and_not_constant() {
+        let v: Vec<f64> = (0..1000).map(|i| uniform(7, i)).collect();
+        assert!(v.iter().all(|x| (0.0..1.0).contains(x)));
+        let mean = v.iter().sum::<f64>() / 1000.0;
+        assert!((mean - 0.5).abs() < 0.05);
+    }
+}

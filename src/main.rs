@@ -1,0 +1,259 @@
+//! The `worley` command: the main job (the harness on the default
+//! configuration) and `worley check` (the harness on any configuration).
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use worley::harness::{self, Campaign, Report};
+use worley::{Config, Metric, Mode, Reference};
+
+#[derive(Parser)]
+#[command(
+    name = "worley",
+    version,
+    about = "Worley's cellular basis: harness and tools"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the harness on one configuration and print its report.
+    Check(CheckArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ModeArg {
+    Exact,
+    Window,
+}
+
+#[derive(clap::Args)]
+struct CheckArgs {
+    /// Dimension: 2, 3 or 4.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(2..=4))]
+    dim: u8,
+    /// Order n: F1..Fn are computed (1 to 16).
+    #[arg(long, default_value_t = 1)]
+    order: usize,
+    /// Metric: euclidean, manhattan, chebyshev, or minkowski:P with P >= 1.
+    #[arg(long, default_value = "euclidean", value_parser = parse_metric)]
+    metric: Metric,
+    /// Search mode.
+    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
+    mode: ModeArg,
+    /// Pattern seed.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Mean density λ of the population table (points per cell).
+    #[arg(long, default_value_t = worley::config::DEFAULT_DENSITY)]
+    density: f64,
+    /// Fraction of 0/1 populations bumped by one (Worley's tuning).
+    #[arg(long, default_value_t = 0.0)]
+    bump: f64,
+    /// Random samples (throughput and statistics).
+    #[arg(long, default_value_t = 1_000_000)]
+    samples: usize,
+    /// Samples checked against the brute-force oracle.
+    #[arg(long, default_value_t = 200_000)]
+    oracle_samples: usize,
+    /// Straddling pairs for the continuity check.
+    #[arg(long, default_value_t = 200_000)]
+    pairs: usize,
+    /// Cells for the grid bias.
+    #[arg(long, default_value_t = 1_000_000)]
+    grid_cells: usize,
+    /// Samples are uniform in [-range, range]^d.
+    #[arg(long, default_value_t = 1000.0)]
+    range: f64,
+    /// Seed of the sample generator.
+    #[arg(long, default_value_t = 1)]
+    campaign_seed: u64,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_metric(s: &str) -> Result<Metric, String> {
+    let metric = match s {
+        "euclidean" => Metric::Euclidean,
+        "manhattan" => Metric::Manhattan,
+        "chebyshev" => Metric::Chebyshev,
+        _ => match s.strip_prefix("minkowski:").map(str::parse::<f64>) {
+            Some(Ok(p)) => Metric::Minkowski(p),
+            _ => return Err(format!(
+                "unknown metric '{s}': use euclidean, manhattan, chebyshev or minkowski:P (P >= 1)"
+            )),
+        },
+    };
+    metric.validate().map_err(|e| e.to_string())?;
+    Ok(metric)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => main_job(),
+        Some(Command::Check(args)) => check(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("worley: {message}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn check(args: &CheckArgs) -> Result<(), String> {
+    let config = Config {
+        seed: args.seed,
+        order: args.order,
+        metric: args.metric,
+        mode: match args.mode {
+            ModeArg::Exact => Mode::Exact,
+            ModeArg::Window => Mode::Window,
+        },
+        density: args.density,
+        bump: args.bump,
+    };
+    if !(args.range.is_finite() && args.range > 0.0) {
+        return Err(format!(
+            "range {} is invalid: use a positive finite number",
+            args.range
+        ));
+    }
+    let campaign = Campaign {
+        seed: args.campaign_seed,
+        samples: args.samples,
+        oracle_samples: args.oracle_samples,
+        range: args.range,
+        pairs: args.pairs,
+        grid_cells: args.grid_cells,
+    };
+    let report = match args.dim {
+        2 => run_reference::<2>(config, &campaign),
+        3 => run_reference::<3>(config, &campaign),
+        _ => run_reference::<4>(config, &campaign),
+    }?;
+    if args.json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{}", report.to_table());
+    }
+    Ok(())
+}
+
+fn run_reference<const D: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
+    let kernel = Reference::<D>::new(config).map_err(|e| e.to_string())?;
+    Ok(harness::run(&kernel, campaign))
+}
+
+/// The main job: for 2D, 3D and 4D, the reference's speed for F1, F2 and F4,
+/// the exact and window searches against the oracle for orders 1..8, and the
+/// statistics of F1; the reports are also written to `out/harness.json`.
+fn main_job() -> Result<(), String> {
+    let started = std::time::Instant::now();
+    let mut reports = Vec::new();
+    println!("worley main job: the f64 reference kernel on the default configuration");
+    println!(
+        "(seed 0, λ {}, Euclidean), one thread for speed, all cores for checks\n",
+        worley::config::DEFAULT_DENSITY
+    );
+    let speed = Campaign {
+        samples: 300_000,
+        oracle_samples: 0,
+        pairs: 0,
+        grid_cells: 0,
+        ..Campaign::default()
+    };
+    let accuracy = Campaign {
+        samples: 200_000,
+        oracle_samples: 100_000,
+        pairs: 100_000,
+        grid_cells: 0,
+        ..Campaign::default()
+    };
+    let statistics = Campaign {
+        samples: 1_000_000,
+        oracle_samples: 0,
+        pairs: 0,
+        grid_cells: 1_000_000,
+        ..Campaign::default()
+    };
+    println!("{:>4} {:>6} {:>14}", "dim", "order", "M samples/s");
+    for dim in 2..=4 {
+        for order in [1, 2, 4] {
+            let config = Config {
+                order,
+                ..Config::default()
+            };
+            let r = dispatch(dim, config, &speed)?;
+            println!(
+                "{:>4} {:>6} {:>14.3}",
+                dim,
+                format!("F{order}"),
+                r.throughput / 1e6
+            );
+            reports.push(r);
+        }
+    }
+    println!();
+    for dim in 2..=4 {
+        for mode in [Mode::Exact, Mode::Window] {
+            let r = dispatch(
+                dim,
+                Config {
+                    order: 8,
+                    mode,
+                    ..Config::default()
+                },
+                &accuracy,
+            )?;
+            print!("{}", r.to_table());
+            println!();
+            reports.push(r);
+        }
+        let r = dispatch(dim, Config::default(), &statistics)?;
+        println!(
+            "{dim}D statistics over {} samples: mean F1 {:.5}, KS {:.5}, grid bias {:+.3}% ({} cells)\n",
+            statistics.samples,
+            r.mean_f1,
+            r.ks,
+            100.0 * r.grid_bias,
+            statistics.grid_cells
+        );
+        reports.push(r);
+    }
+    std::fs::create_dir_all("out").map_err(|e| format!("cannot create out/: {e}"))?;
+    let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
+    write_atomically("out/harness.json", json.as_bytes())?;
+    println!(
+        "wrote out/harness.json in {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn dispatch(dim: usize, config: Config, campaign: &Campaign) -> Result<Report, String> {
+    match dim {
+        2 => run_reference::<2>(config, campaign),
+        3 => run_reference::<3>(config, campaign),
+        4 => run_reference::<4>(config, campaign),
+        _ => Err(format!("dimension {dim} is not supported: use 2, 3 or 4")),
+    }
+}
+
+/// Writes to a temporary file in the same folder, then renames it, so no
+/// partial file is left behind on failure.
+fn write_atomically(path: &str, bytes: &[u8]) -> Result<(), String> {
+    let tmp = format!("{path}.tmp");
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            format!("cannot write {path}: {e}")
+        })
+}
