@@ -37,9 +37,7 @@ impl Metric {
     /// Checks the metric's parameter.
     pub fn validate(self) -> Result<(), ConfigError> {
         match self {
-            Metric::Minkowski(p) if !(p.is_finite() && p >= 1.0) => {
-                Err(ConfigError::MinkowskiExponent(p))
-            }
+            Metric::Minkowski(p) if !(p.is_finite() && p >= 1.0) => Err(ConfigError::MinkowskiExponent(p)),
             _ => Ok(()),
         }
     }
@@ -93,9 +91,7 @@ impl Metric {
             // the cube [−1, 1]^d
             Metric::Chebyshev => 2f64.powi(dim as i32),
             // the superball: (2 Γ(1 + 1/p))^d / Γ(1 + d/p)
-            Metric::Minkowski(p) => {
-                (2.0 * gamma(1.0 + 1.0 / p)).powi(dim as i32) / gamma(1.0 + d / p)
-            }
+            Metric::Minkowski(p) => (2.0 * gamma(1.0 + 1.0 / p)).powi(dim as i32) / gamma(1.0 + d / p),
         }
     }
 
@@ -171,14 +167,7 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Self {
-        Config {
-            seed: 0,
-            order: 1,
-            metric: Metric::Euclidean,
-            mode: Mode::Exact,
-            density: DEFAULT_DENSITY,
-            bump: 0.0,
-        }
+        Config { seed: 0, order: 1, metric: Metric::Euclidean, mode: Mode::Exact, density: DEFAULT_DENSITY, bump: 0.0 }
     }
 }
 
@@ -219,10 +208,9 @@ impl fmt::Display for ConfigError {
             ConfigError::Order(n) => {
                 write!(f, "order {n} is not supported: use 1 to {MAX_ORDER}")
             }
-            ConfigError::MinkowskiExponent(p) => write!(
-                f,
-                "Minkowski exponent {p} is not a metric: use a finite p >= 1 (or Chebyshev for p = infinity)"
-            ),
+            ConfigError::MinkowskiExponent(p) => {
+                write!(f, "Minkowski exponent {p} is not a metric: use a finite p >= 1 (or Chebyshev for p = infinity)")
+            }
             ConfigError::Density(d) => write!(
                 f,
                 "density {d} is out of range: use {} to {} feature points per cube",
@@ -244,85 +232,22 @@ mod tests {
     #[test]
     fn invalid_configurations_are_rejected_with_the_reason() {
         let bad = [
-            (
-                Config {
-                    order: 0,
-                    ..Config::default()
-                },
-                "order 0",
-            ),
-            (
-                Config {
-                    order: MAX_ORDER + 1,
-                    ..Config::default()
-                },
-                "order 17",
-            ),
-            (
-                Config {
-                    metric: Metric::Minkowski(0.5),
-                    ..Config::default()
-                },
-                "exponent 0.5",
-            ),
-            (
-                Config {
-                    metric: Metric::Minkowski(f64::NAN),
-                    ..Config::default()
-                },
-                "exponent NaN",
-            ),
-            (
-                Config {
-                    metric: Metric::Minkowski(f64::INFINITY),
-                    ..Config::default()
-                },
-                "Chebyshev",
-            ),
-            (
-                Config {
-                    density: 0.0,
-                    ..Config::default()
-                },
-                "density 0",
-            ),
-            (
-                Config {
-                    density: f64::NAN,
-                    ..Config::default()
-                },
-                "density NaN",
-            ),
-            (
-                Config {
-                    bump: 1.5,
-                    ..Config::default()
-                },
-                "bump fraction 1.5",
-            ),
-            (
-                Config {
-                    bump: -0.0 - 1e-9,
-                    ..Config::default()
-                },
-                "bump fraction",
-            ),
+            (Config { order: 0, ..Config::default() }, "order 0"),
+            (Config { order: MAX_ORDER + 1, ..Config::default() }, "order 17"),
+            (Config { metric: Metric::Minkowski(0.5), ..Config::default() }, "exponent 0.5"),
+            (Config { metric: Metric::Minkowski(f64::NAN), ..Config::default() }, "exponent NaN"),
+            (Config { metric: Metric::Minkowski(f64::INFINITY), ..Config::default() }, "Chebyshev"),
+            (Config { density: 0.0, ..Config::default() }, "density 0"),
+            (Config { density: f64::NAN, ..Config::default() }, "density NaN"),
+            (Config { bump: 1.5, ..Config::default() }, "bump fraction 1.5"),
+            (Config { bump: -0.0 - 1e-9, ..Config::default() }, "bump fraction"),
         ];
         for (config, words) in bad {
             let err = config.validate().expect_err("must be rejected");
-            assert!(
-                err.to_string().contains(words),
-                "{err} should mention {words}"
-            );
+            assert!(err.to_string().contains(words), "{err} should mention {words}");
         }
         assert!(Config::default().validate().is_ok());
-        assert!(Config {
-            metric: Metric::Minkowski(1.0),
-            order: MAX_ORDER,
-            ..Config::default()
-        }
-        .validate()
-        .is_ok());
+        assert!(Config { metric: Metric::Minkowski(1.0), order: MAX_ORDER, ..Config::default() }.validate().is_ok());
     }
 
     #[test]

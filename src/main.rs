@@ -8,11 +8,7 @@ use worley::harness::{self, Campaign, Report};
 use worley::{Config, Metric, Mode, Reference};
 
 #[derive(Parser)]
-#[command(
-    name = "worley",
-    version,
-    about = "Worley's cellular basis: harness and tools"
-)]
+#[command(name = "worley", version, about = "Worley's cellular basis: harness and tools")]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -83,9 +79,11 @@ fn parse_metric(s: &str) -> Result<Metric, String> {
         "chebyshev" => Metric::Chebyshev,
         _ => match s.strip_prefix("minkowski:").map(str::parse::<f64>) {
             Some(Ok(p)) => Metric::Minkowski(p),
-            _ => return Err(format!(
-                "unknown metric '{s}': use euclidean, manhattan, chebyshev or minkowski:P (P >= 1)"
-            )),
+            _ => {
+                return Err(format!(
+                    "unknown metric '{s}': use euclidean, manhattan, chebyshev or minkowski:P (P >= 1)"
+                ))
+            }
         },
     };
     metric.validate().map_err(|e| e.to_string())?;
@@ -120,10 +118,7 @@ fn check(args: &CheckArgs) -> Result<(), String> {
         bump: args.bump,
     };
     if !(args.range.is_finite() && args.range > 0.0) {
-        return Err(format!(
-            "range {} is invalid: use a positive finite number",
-            args.range
-        ));
+        return Err(format!("range {} is invalid: use a positive finite number", args.range));
     }
     let campaign = Campaign {
         seed: args.campaign_seed,
@@ -162,56 +157,24 @@ fn main_job() -> Result<(), String> {
         "(seed 0, λ {}, Euclidean), one thread for speed, all cores for checks\n",
         worley::config::DEFAULT_DENSITY
     );
-    let speed = Campaign {
-        samples: 300_000,
-        oracle_samples: 0,
-        pairs: 0,
-        grid_cells: 0,
-        ..Campaign::default()
-    };
-    let accuracy = Campaign {
-        samples: 200_000,
-        oracle_samples: 100_000,
-        pairs: 100_000,
-        grid_cells: 0,
-        ..Campaign::default()
-    };
-    let statistics = Campaign {
-        samples: 1_000_000,
-        oracle_samples: 0,
-        pairs: 0,
-        grid_cells: 1_000_000,
-        ..Campaign::default()
-    };
+    let speed = Campaign { samples: 300_000, oracle_samples: 0, pairs: 0, grid_cells: 0, ..Campaign::default() };
+    let accuracy =
+        Campaign { samples: 200_000, oracle_samples: 100_000, pairs: 100_000, grid_cells: 0, ..Campaign::default() };
+    let statistics =
+        Campaign { samples: 1_000_000, oracle_samples: 0, pairs: 0, grid_cells: 1_000_000, ..Campaign::default() };
     println!("{:>4} {:>6} {:>14}", "dim", "order", "M samples/s");
     for dim in 2..=4 {
         for order in [1, 2, 4] {
-            let config = Config {
-                order,
-                ..Config::default()
-            };
+            let config = Config { order, ..Config::default() };
             let r = dispatch(dim, config, &speed)?;
-            println!(
-                "{:>4} {:>6} {:>14.3}",
-                dim,
-                format!("F{order}"),
-                r.throughput / 1e6
-            );
+            println!("{:>4} {:>6} {:>14.3}", dim, format!("F{order}"), r.throughput / 1e6);
             reports.push(r);
         }
     }
     println!();
     for dim in 2..=4 {
         for mode in [Mode::Exact, Mode::Window] {
-            let r = dispatch(
-                dim,
-                Config {
-                    order: 8,
-                    mode,
-                    ..Config::default()
-                },
-                &accuracy,
-            )?;
+            let r = dispatch(dim, Config { order: 8, mode, ..Config::default() }, &accuracy)?;
             print!("{}", r.to_table());
             println!();
             reports.push(r);
@@ -230,10 +193,7 @@ fn main_job() -> Result<(), String> {
     std::fs::create_dir_all("out").map_err(|e| format!("cannot create out/: {e}"))?;
     let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
     write_atomically("out/harness.json", json.as_bytes())?;
-    println!(
-        "wrote out/harness.json in {:.1} s",
-        started.elapsed().as_secs_f64()
-    );
+    println!("wrote out/harness.json in {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }
 
@@ -250,10 +210,8 @@ fn dispatch(dim: usize, config: Config, campaign: &Campaign) -> Result<Report, S
 /// partial file is left behind on failure.
 fn write_atomically(path: &str, bytes: &[u8]) -> Result<(), String> {
     let tmp = format!("{path}.tmp");
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            format!("cannot write {path}: {e}")
-        })
+    std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path)).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("cannot write {path}: {e}")
+    })
 }

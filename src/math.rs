@@ -66,7 +66,7 @@ mod tests {
     fn gamma_of_one_plus_inverse_matches_an_integral() {
         // Γ(1 + 1/d) = ∫₀^∞ exp(−t^d) dt: check by the trapezoid rule.
         for d in 2..=4 {
-            let h = 1e-4;
+            let h: f64 = 1e-4;
             let mut sum = 0.5;
             let mut t = h;
             while t < 8.0 {
@@ -75,11 +75,7 @@ mod tests {
             }
             let integral = sum * h;
             let rel = (gamma(1.0 + 1.0 / d as f64) - integral).abs();
-            assert!(
-                rel < 1e-7,
-                "d = {d}: {integral} vs {}",
-                gamma(1.0 + 1.0 / d as f64)
-            );
+            assert!(rel < 1e-7, "d = {d}: {integral} vs {}", gamma(1.0 + 1.0 / d as f64));
         }
     }
 

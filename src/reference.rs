@@ -25,7 +25,7 @@
 //! root is taken per candidate. Ties keep the point found first.
 //!
 //! ## Bad input
-//! A non-finite coordinate, or one with |x·S| > [`MAX_CELL_COORD`](crate::definition::MAX_CELL_COORD), gives
+//! A non-finite coordinate, or one with |x·S| > [`MAX_CELL_COORD`], gives
 //! NaN distances and deltas and [`INVALID_ID`] for every order. The search
 //! stops at Chebyshev radius [`MAX_SHELLS`]; a search that would need more
 //! (it never happens for valid configurations: it needs an empty region of
@@ -33,7 +33,7 @@
 //! value.
 
 use crate::config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
-use crate::definition::{Pattern, INVALID_ID};
+use crate::definition::{Pattern, INVALID_ID, MAX_CELL_COORD};
 
 /// The largest Chebyshev radius of cells an exact search visits.
 pub const MAX_SHELLS: u32 = 16;
@@ -70,10 +70,7 @@ impl<const D: usize> Features<D> {
     /// The documented result for bad input: NaN distances and deltas,
     /// [`INVALID_ID`].
     pub fn invalid(order: usize) -> Self {
-        Features {
-            distance: [f64::NAN; MAX_ORDER],
-            ..Self::empty(order)
-        }
+        Features { distance: [f64::NAN; MAX_ORDER], ..Self::empty(order) }
     }
 
     /// F1..Fn as a slice.
@@ -101,11 +98,7 @@ impl<const D: usize> Reference<D> {
         let pattern = Pattern::new(&config)?;
         let mut neighbours = shell(1);
         neighbours.sort_by_key(|o| o.iter().filter(|&&v| v != 0).count());
-        Ok(Reference {
-            config,
-            pattern,
-            neighbours,
-        })
+        Ok(Reference { config, pattern, neighbours })
     }
 
     /// The configuration.
@@ -120,11 +113,26 @@ impl<const D: usize> Reference<D> {
 
     /// F1..Fn, deltas and IDs at `x` (user units).
     pub fn evaluate(&self, x: [f64; D]) -> Features<D> {
+        match self.pattern.locate(x) {
+            Some((cell, f)) => self.evaluate_in_cell(cell, f),
+            None => Features::invalid(self.config.order),
+        }
+    }
+
+    /// F1..Fn at the point `cell + fraction` given in cell units (x·S), for
+    /// samples whose user coordinate would lose bits in one f64 (large
+    /// worlds), and for placing samples exactly (ties, lattice planes).
+    ///
+    /// A fraction outside [0, 1] (or NaN) or a cell beyond
+    /// ±[`MAX_CELL_COORD`] gives the invalid result.
+    pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f64; D]) -> Features<D> {
         let order = self.config.order;
         let metric = self.config.metric;
-        let Some((cell, f)) = self.pattern.locate(x) else {
+        let limit = MAX_CELL_COORD as i64;
+        if !(fraction.iter().all(|f| (0.0..=1.0).contains(f)) && cell.iter().all(|c| c.abs() <= limit)) {
             return Features::invalid(order);
-        };
+        }
+        let f = fraction;
         let mut best = Nearest::<D>::new(order);
         let visit = |offset: [i64; D], best: &mut Nearest<D>| {
             if metric.rank(&gaps(&f, &offset)) >= best.worst() {
@@ -179,8 +187,7 @@ pub(crate) fn gaps<const D: usize>(f: &[f64; D], offset: &[i64; D]) -> [f64; D] 
 #[inline]
 pub fn outside_distance<const D: usize>(f: &[f64; D], r: u32) -> f64 {
     let r = r as f64;
-    f.iter()
-        .fold(f64::INFINITY, |m, &fa| m.min(fa + r).min(r + 1.0 - fa))
+    f.iter().fold(f64::INFINITY, |m, &fa| m.min(fa + r).min(r + 1.0 - fa))
 }
 
 /// The cell offsets at Chebyshev radius exactly `r`, in lexicographic order.

@@ -23,9 +23,21 @@ pub fn brute_force<const D: usize>(
     x: [f64; D],
     scratch: &mut Vec<Candidate<D>>,
 ) -> Features<D> {
-    let Some((cell, f)) = pattern.locate(x) else {
-        return Features::invalid(order);
-    };
+    match pattern.locate(x) {
+        Some((cell, f)) => brute_force_in_cell(pattern, metric, order, cell, f, scratch),
+        None => Features::invalid(order),
+    }
+}
+
+/// The exact F1..Fn at `cell + f` (cell units, f ∈ [0, 1]^d).
+pub fn brute_force_in_cell<const D: usize>(
+    pattern: &Pattern<D>,
+    metric: Metric,
+    order: usize,
+    cell: [i64; D],
+    f: [f64; D],
+    scratch: &mut Vec<Candidate<D>>,
+) -> Features<D> {
     for r in 2..=MAX_SHELLS as i64 {
         scratch.clear();
         let side = 2 * r + 1;

@@ -47,7 +47,8 @@ pub struct Report {
     pub mean_f1: f64,
     /// Kolmogorov–Smirnov distance of F1 from the Poisson law.
     pub ks: f64,
-    /// Mean F1 at cell centres over mean F1 at cell corners, minus one.
+    /// Mean F1 at cell centres over mean F1 at cell corners, minus one (NaN
+    /// when the campaign sampled no cells).
     pub grid_bias: f64,
     /// Fraction of the random samples whose search went beyond the 3^d block.
     pub widened: f64,
@@ -63,12 +64,7 @@ pub struct Report {
 
 impl Report {
     /// An empty report for a kernel.
-    pub fn new<const D: usize>(
-        kernel: String,
-        config: &Config,
-        pattern: &Pattern<D>,
-        campaign: &Campaign,
-    ) -> Self {
+    pub fn new<const D: usize>(kernel: String, config: &Config, pattern: &Pattern<D>, campaign: &Campaign) -> Self {
         Report {
             kernel,
             dim: D,
@@ -92,9 +88,9 @@ impl Report {
     /// True when the kernel agreed with the oracle everywhere and no pair
     /// violated continuity.
     pub fn is_exact(&self) -> bool {
-        self.orders.iter().all(|o| {
-            o.oracle_disagreements == 0 && o.id_disagreements == 0 && o.continuity_violations == 0
-        })
+        self.orders
+            .iter()
+            .all(|o| o.oracle_disagreements == 0 && o.id_disagreements == 0 && o.continuity_violations == 0)
     }
 
     /// The report as pretty-printed JSON.
@@ -122,11 +118,11 @@ impl Report {
         );
         let _ = writeln!(
             s,
-            "  {:.3} M samples/s (1 thread)   mean F1 {:.5}   KS {:.5}   grid bias {:+.3}%   widened {:.4}%   max shells {}",
+            "  {:.3} M samples/s (1 thread)   mean F1 {:.5}   KS {:.5}   grid bias {}   widened {:.4}%   max shells {}",
             self.throughput / 1e6,
             self.mean_f1,
             self.ks,
-            100.0 * self.grid_bias,
+            if self.grid_bias.is_nan() { "n/a".to_string() } else { format!("{:+.3}%", 100.0 * self.grid_bias) },
             100.0 * self.widened,
             self.max_shells
         );
@@ -138,13 +134,7 @@ impl Report {
         let _ = writeln!(
             s,
             "  {:>5} {:>12} {:>10} {:>12} {:>13} {:>12} {:>12}",
-            "order",
-            "wrong F_k",
-            "wrong ID",
-            "max error",
-            "beyond block",
-            "discontin.",
-            "max excess"
+            "order", "wrong F_k", "wrong ID", "max error", "beyond block", "discontin.", "max excess"
         );
         let per = |n: u64, of: usize| format!("{n} ({:.1} ppm)", 1e6 * n as f64 / of.max(1) as f64);
         for (k, o) in self.orders.iter().enumerate() {
