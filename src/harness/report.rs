@@ -133,16 +133,16 @@ impl Report {
         );
         let _ = writeln!(
             s,
-            "  {:>5} {:>12} {:>10} {:>12} {:>13} {:>12} {:>12}",
+            "  {:>5} {:>16} {:>10} {:>12} {:>18} {:>12} {:>12}",
             "order", "wrong F_k", "wrong ID", "max error", "beyond block", "discontin.", "max excess"
         );
         let per = |n: u64, of: usize| format!("{n} ({:.1} ppm)", 1e6 * n as f64 / of.max(1) as f64);
         for (k, o) in self.orders.iter().enumerate() {
             let _ = writeln!(
                 s,
-                "  {:>5} {:>12} {:>10} {:>12.3e} {:>13} {:>12} {:>12.3e}",
+                "  {:>5} {:>16} {:>10} {:>12.3e} {:>18} {:>12} {:>12.3e}",
                 format!("F{}", k + 1),
-                o.oracle_disagreements,
+                per(o.oracle_disagreements, self.campaign.oracle_samples),
                 o.id_disagreements,
                 o.max_error,
                 per(o.needs_wider, self.campaign.oracle_samples),
