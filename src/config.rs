@@ -200,6 +200,13 @@ pub enum ConfigError {
     Density(f64),
     /// The bump fraction is outside [0, 1] or NaN.
     Bump(f64),
+    /// An evaluator compiled for order `compiled` was given another order.
+    OrderMismatch {
+        /// The configuration's order.
+        asked: usize,
+        /// The evaluator's compile-time order.
+        compiled: usize,
+    },
 }
 
 impl fmt::Display for ConfigError {
@@ -218,6 +225,9 @@ impl fmt::Display for ConfigError {
             ),
             ConfigError::Bump(b) => {
                 write!(f, "bump fraction {b} is out of range: use 0 to 1")
+            }
+            ConfigError::OrderMismatch { asked, compiled } => {
+                write!(f, "order {asked} asked of an evaluator compiled for order {compiled}: use order {compiled}")
             }
         }
     }

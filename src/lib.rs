@@ -11,6 +11,9 @@
 //! - [`Reference`] is the f64 reference kernel: plain loops, exact by
 //!   construction (it widens its search until no unvisited cell can hold a
 //!   closer point), written to be read.
+//! - [`Simd`] is the 8-lane f32 kernel on `wide`: the same points, the same
+//!   certified search, one sample or eight per call, bit-identical between
+//!   the two.
 //! - [`harness`] checks any evaluator against a brute-force oracle, for
 //!   continuity across cell boundaries and against the Poisson law, and
 //!   measures its throughput.
@@ -35,7 +38,9 @@ pub mod definition;
 pub mod harness;
 pub mod math;
 pub mod reference;
+pub mod simd;
 
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Features, Reference};
+pub use simd::{simd_level, Features32, Features8, Outputs, Simd};

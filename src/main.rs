@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use worley::harness::{self, Campaign, Report};
-use worley::{Config, Metric, Mode, Reference};
+use worley::{Config, Metric, Mode, Outputs, Reference, Simd};
 
 #[derive(Parser)]
 #[command(name = "worley", version, about = "Worley's cellular basis: harness and tools")]
@@ -18,6 +18,14 @@ struct Cli {
 enum Command {
     /// Run the harness on one configuration and print its report.
     Check(CheckArgs),
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum KernelArg {
+    /// The f64 reference kernel.
+    Reference,
+    /// The 8-lane f32 kernel (orders 1 to 8).
+    Simd,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -37,6 +45,9 @@ struct CheckArgs {
     /// Metric: euclidean, manhattan, chebyshev, or minkowski:P with P >= 1.
     #[arg(long, default_value = "euclidean", value_parser = parse_metric)]
     metric: Metric,
+    /// Implementation under test.
+    #[arg(long, value_enum, default_value_t = KernelArg::Reference)]
+    kernel: KernelArg,
     /// Search mode.
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     mode: ModeArg,
@@ -128,17 +139,40 @@ fn check(args: &CheckArgs) -> Result<(), String> {
         pairs: args.pairs,
         grid_cells: args.grid_cells,
     };
-    let report = match args.dim {
-        2 => run_reference::<2>(config, &campaign),
-        3 => run_reference::<3>(config, &campaign),
-        _ => run_reference::<4>(config, &campaign),
-    }?;
+    let report = match args.kernel {
+        KernelArg::Reference => dispatch(args.dim as usize, config, &campaign)?,
+        KernelArg::Simd => match args.dim {
+            2 => run_simd::<2>(config, &campaign)?,
+            3 => run_simd::<3>(config, &campaign)?,
+            _ => run_simd::<4>(config, &campaign)?,
+        },
+    };
     if args.json {
         println!("{}", report.to_json());
     } else {
         print!("{}", report.to_table());
     }
     Ok(())
+}
+
+/// The SIMD kernel at the configuration's order (its order is a const
+/// generic, so each supported order is a separate instantiation).
+fn run_simd<const D: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
+    fn go<const D: usize, const N: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
+        let kernel = Simd::<D, N>::new(config, Outputs::Ids).map_err(|e| e.to_string())?;
+        Ok(harness::run(&kernel, campaign))
+    }
+    match config.order {
+        1 => go::<D, 1>(config, campaign),
+        2 => go::<D, 2>(config, campaign),
+        3 => go::<D, 3>(config, campaign),
+        4 => go::<D, 4>(config, campaign),
+        5 => go::<D, 5>(config, campaign),
+        6 => go::<D, 6>(config, campaign),
+        7 => go::<D, 7>(config, campaign),
+        8 => go::<D, 8>(config, campaign),
+        n => Err(format!("order {n} is not built into the SIMD kernel's command line: use 1 to 8")),
+    }
 }
 
 fn run_reference<const D: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {

@@ -75,6 +75,52 @@ impl<const D: usize> Kernel<D> for Reference<D> {
     }
 }
 
+impl<const D: usize, const N: usize> Kernel<D> for crate::simd::Simd<D, N> {
+    fn name(&self) -> String {
+        "simd-f32x8".into()
+    }
+    fn config(&self) -> &Config {
+        crate::simd::Simd::config(self)
+    }
+    fn pattern(&self) -> &Pattern<D> {
+        crate::simd::Simd::pattern(self)
+    }
+    /// The 1-lane instantiation.
+    fn evaluate(&self, x: [f64; D]) -> Features<D> {
+        widen_features(&crate::simd::Simd::evaluate(self, x))
+    }
+    /// The 8-lane instantiation, eight samples per call.
+    fn evaluate_batch(&self, xs: &[[f64; D]], out: &mut [Features<D>]) {
+        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
+            let mut block = [[0.0; D]; 8];
+            block[..chunk.len()].copy_from_slice(chunk);
+            let r = self.evaluate8(&block);
+            for (i, o) in dst.iter_mut().take(chunk.len()).enumerate() {
+                *o = widen_features(&crate::simd::lane(&r, i));
+            }
+        }
+    }
+    /// f32 arithmetic relative to the cell: the fraction is rounded to f32
+    /// once and each delta and rank a few more times, about 2^−22 relative
+    /// to F plus 2^−23 cell units absolute; independent of |x|.
+    fn error_bound(&self, _magnitude: f64, f: f64) -> f64 {
+        let cell = 1.0 / self.pattern().scale();
+        4.0 * f32::EPSILON as f64 * (f + cell)
+    }
+}
+
+/// An f32 result as the harness's f64 [`Features`].
+pub fn widen_features<const D: usize, const N: usize>(r: &crate::simd::Features32<D, N>) -> Features<D> {
+    let mut out = Features::empty(N);
+    for k in 0..N {
+        out.distance[k] = r.distance[k] as f64;
+        out.delta[k] = r.delta[k].map(f64::from);
+        out.id[k] = r.id[k];
+    }
+    out.shells = 1;
+    out
+}
+
 /// A seeded test campaign.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct Campaign {

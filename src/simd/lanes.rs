@@ -1,0 +1,323 @@
+//! The lane abstraction the SIMD kernel is written over.
+//!
+//! The kernel is written once against [`Lanes`] and instantiated for
+//! [`One`] (plain `f32`/`u32`) and [`Eight`] (`wide`'s `f32x8`/`u32x8`). Every
+//! operation here is one IEEE operation per lane with the same result in
+//! every build: no fused multiply-add, no approximate reciprocal, no
+//! horizontal reduction whose order could change. A single point evaluated
+//! through `One` and the same point in any lane of `Eight` are therefore
+//! bit-identical, in the default build and in an AVX2 build alike.
+
+use wide::{f32x8, i32x8, u32x8};
+
+/// A set of lanes: float, unsigned and mask types and the operations the
+/// kernel needs.
+pub trait Lanes: Copy + 'static {
+    /// Number of lanes.
+    const N: usize;
+    /// f32 lanes.
+    type F: Copy;
+    /// u32 lanes.
+    type U: Copy;
+    /// A per-lane condition.
+    type M: Copy;
+
+    /// Every lane `v`.
+    fn f(v: f32) -> Self::F;
+    /// Every lane `v`.
+    fn u(v: u32) -> Self::U;
+    /// Lanes from an array (`a.len() == N`).
+    fn f_load(a: &[f32]) -> Self::F;
+    /// Lanes from an array (`a.len() == N`).
+    fn u_load(a: &[u32]) -> Self::U;
+    /// Lanes into an array (`out.len() == N`).
+    fn f_store(v: Self::F, out: &mut [f32]);
+    /// Lanes into an array (`out.len() == N`).
+    fn u_store(v: Self::U, out: &mut [u32]);
+
+    /// a + b
+    fn add(a: Self::F, b: Self::F) -> Self::F;
+    /// a − b
+    fn sub(a: Self::F, b: Self::F) -> Self::F;
+    /// a · b (rounded once; never fused)
+    fn mul(a: Self::F, b: Self::F) -> Self::F;
+    /// min(a, b) for non-NaN lanes
+    fn min(a: Self::F, b: Self::F) -> Self::F;
+    /// max(a, b) for non-NaN lanes
+    fn max(a: Self::F, b: Self::F) -> Self::F;
+    /// |a|
+    fn abs(a: Self::F) -> Self::F;
+    /// √a, correctly rounded
+    fn sqrt(a: Self::F) -> Self::F;
+    /// a < b
+    fn lt(a: Self::F, b: Self::F) -> Self::M;
+    /// m ? a : b
+    fn select(m: Self::M, a: Self::F, b: Self::F) -> Self::F;
+    /// m ? a : b
+    fn select_u(m: Self::M, a: Self::U, b: Self::U) -> Self::U;
+    /// a ∧ b
+    fn and(a: Self::M, b: Self::M) -> Self::M;
+    /// Any lane true.
+    fn any(m: Self::M) -> bool;
+
+    /// a + b (wrapping)
+    fn u_add(a: Self::U, b: Self::U) -> Self::U;
+    /// a · b (wrapping)
+    fn u_mul(a: Self::U, b: Self::U) -> Self::U;
+    /// a ^ b
+    fn u_xor(a: Self::U, b: Self::U) -> Self::U;
+    /// a >> 16
+    fn u_shr16(a: Self::U) -> Self::U;
+    /// a >> 13
+    fn u_shr13(a: Self::U) -> Self::U;
+    /// a >> 8
+    fn u_shr8(a: Self::U) -> Self::U;
+    /// a as f32 for a < 2^24 (exact)
+    fn u24_to_f(a: Self::U) -> Self::F;
+}
+
+/// One lane: plain scalars.
+#[derive(Clone, Copy, Debug)]
+pub struct One;
+
+/// Eight lanes: `wide`'s 256-bit types.
+#[derive(Clone, Copy, Debug)]
+pub struct Eight;
+
+impl Lanes for One {
+    const N: usize = 1;
+    type F = f32;
+    type U = u32;
+    type M = bool;
+
+    #[inline(always)]
+    fn f(v: f32) -> f32 {
+        v
+    }
+    #[inline(always)]
+    fn u(v: u32) -> u32 {
+        v
+    }
+    #[inline(always)]
+    fn f_load(a: &[f32]) -> f32 {
+        a[0]
+    }
+    #[inline(always)]
+    fn u_load(a: &[u32]) -> u32 {
+        a[0]
+    }
+    #[inline(always)]
+    fn f_store(v: f32, out: &mut [f32]) {
+        out[0] = v;
+    }
+    #[inline(always)]
+    fn u_store(v: u32, out: &mut [u32]) {
+        out[0] = v;
+    }
+    #[inline(always)]
+    fn add(a: f32, b: f32) -> f32 {
+        a + b
+    }
+    #[inline(always)]
+    fn sub(a: f32, b: f32) -> f32 {
+        a - b
+    }
+    #[inline(always)]
+    fn mul(a: f32, b: f32) -> f32 {
+        a * b
+    }
+    #[inline(always)]
+    fn min(a: f32, b: f32) -> f32 {
+        if b < a {
+            b
+        } else {
+            a
+        }
+    }
+    #[inline(always)]
+    fn max(a: f32, b: f32) -> f32 {
+        if b > a {
+            b
+        } else {
+            a
+        }
+    }
+    #[inline(always)]
+    fn abs(a: f32) -> f32 {
+        a.abs()
+    }
+    #[inline(always)]
+    fn sqrt(a: f32) -> f32 {
+        a.sqrt()
+    }
+    #[inline(always)]
+    fn lt(a: f32, b: f32) -> bool {
+        a < b
+    }
+    #[inline(always)]
+    fn select(m: bool, a: f32, b: f32) -> f32 {
+        if m {
+            a
+        } else {
+            b
+        }
+    }
+    #[inline(always)]
+    fn select_u(m: bool, a: u32, b: u32) -> u32 {
+        if m {
+            a
+        } else {
+            b
+        }
+    }
+    #[inline(always)]
+    fn and(a: bool, b: bool) -> bool {
+        a & b
+    }
+    #[inline(always)]
+    fn any(m: bool) -> bool {
+        m
+    }
+    #[inline(always)]
+    fn u_add(a: u32, b: u32) -> u32 {
+        a.wrapping_add(b)
+    }
+    #[inline(always)]
+    fn u_mul(a: u32, b: u32) -> u32 {
+        a.wrapping_mul(b)
+    }
+    #[inline(always)]
+    fn u_xor(a: u32, b: u32) -> u32 {
+        a ^ b
+    }
+    #[inline(always)]
+    fn u_shr16(a: u32) -> u32 {
+        a >> 16
+    }
+    #[inline(always)]
+    fn u_shr13(a: u32) -> u32 {
+        a >> 13
+    }
+    #[inline(always)]
+    fn u_shr8(a: u32) -> u32 {
+        a >> 8
+    }
+    #[inline(always)]
+    fn u24_to_f(a: u32) -> f32 {
+        a as i32 as f32
+    }
+}
+
+impl Lanes for Eight {
+    const N: usize = 8;
+    type F = f32x8;
+    type U = u32x8;
+    type M = f32x8;
+
+    #[inline(always)]
+    fn f(v: f32) -> f32x8 {
+        f32x8::splat(v)
+    }
+    #[inline(always)]
+    fn u(v: u32) -> u32x8 {
+        u32x8::splat(v)
+    }
+    #[inline(always)]
+    fn f_load(a: &[f32]) -> f32x8 {
+        let mut v = [0.0; 8];
+        v.copy_from_slice(&a[..8]);
+        f32x8::new(v)
+    }
+    #[inline(always)]
+    fn u_load(a: &[u32]) -> u32x8 {
+        let mut v = [0; 8];
+        v.copy_from_slice(&a[..8]);
+        u32x8::new(v)
+    }
+    #[inline(always)]
+    fn f_store(v: f32x8, out: &mut [f32]) {
+        out[..8].copy_from_slice(&v.to_array());
+    }
+    #[inline(always)]
+    fn u_store(v: u32x8, out: &mut [u32]) {
+        out[..8].copy_from_slice(&v.to_array());
+    }
+    #[inline(always)]
+    fn add(a: f32x8, b: f32x8) -> f32x8 {
+        a + b
+    }
+    #[inline(always)]
+    fn sub(a: f32x8, b: f32x8) -> f32x8 {
+        a - b
+    }
+    #[inline(always)]
+    fn mul(a: f32x8, b: f32x8) -> f32x8 {
+        a * b
+    }
+    #[inline(always)]
+    fn min(a: f32x8, b: f32x8) -> f32x8 {
+        // Same lane rule as `One::min`: take b only where b < a.
+        b.simd_lt(a).select(b, a)
+    }
+    #[inline(always)]
+    fn max(a: f32x8, b: f32x8) -> f32x8 {
+        a.simd_lt(b).select(b, a)
+    }
+    #[inline(always)]
+    fn abs(a: f32x8) -> f32x8 {
+        a.abs()
+    }
+    #[inline(always)]
+    fn sqrt(a: f32x8) -> f32x8 {
+        a.sqrt()
+    }
+    #[inline(always)]
+    fn lt(a: f32x8, b: f32x8) -> f32x8 {
+        a.simd_lt(b)
+    }
+    #[inline(always)]
+    fn select(m: f32x8, a: f32x8, b: f32x8) -> f32x8 {
+        m.select(a, b)
+    }
+    #[inline(always)]
+    fn select_u(m: f32x8, a: u32x8, b: u32x8) -> u32x8 {
+        m.select(a, b)
+    }
+    #[inline(always)]
+    fn and(a: f32x8, b: f32x8) -> f32x8 {
+        a & b
+    }
+    #[inline(always)]
+    fn any(m: f32x8) -> bool {
+        m.any()
+    }
+    #[inline(always)]
+    fn u_add(a: u32x8, b: u32x8) -> u32x8 {
+        a + b
+    }
+    #[inline(always)]
+    fn u_mul(a: u32x8, b: u32x8) -> u32x8 {
+        a * b
+    }
+    #[inline(always)]
+    fn u_xor(a: u32x8, b: u32x8) -> u32x8 {
+        a ^ b
+    }
+    #[inline(always)]
+    fn u_shr16(a: u32x8) -> u32x8 {
+        a >> 16_u32
+    }
+    #[inline(always)]
+    fn u_shr13(a: u32x8) -> u32x8 {
+        a >> 13_u32
+    }
+    #[inline(always)]
+    fn u_shr8(a: u32x8) -> u32x8 {
+        a >> 8_u32
+    }
+    #[inline(always)]
+    fn u24_to_f(a: u32x8) -> f32x8 {
+        let i: i32x8 = bytemuck::cast(a);
+        f32x8::from_i32x8(i)
+    }
+}

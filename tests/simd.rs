@@ -1,0 +1,153 @@
+//! The 8-lane kernel: the same function as the reference (through the shared
+//! harness), one lane and eight lanes bit-identical, bad lanes isolated.
+
+use worley::harness::{self, sample_point, Campaign, Report};
+use worley::simd::lane;
+use worley::{Config, Features32, Metric, Mode, Outputs, Simd, INVALID_ID};
+
+fn check<const D: usize, const N: usize>(config: Config, samples: usize) -> Report {
+    let kernel = Simd::<D, N>::new(config, Outputs::IdsAndDeltas).unwrap();
+    let campaign =
+        Campaign { seed: 21, samples: 0, oracle_samples: samples, range: 1000.0, pairs: samples, grid_cells: 0 };
+    let mut report = Report::new::<D>("simd".into(), &config, kernel.pattern(), &campaign);
+    harness::compare_with_oracle(&kernel, &campaign, &mut report);
+    harness::continuity(&kernel, &campaign, &mut report);
+    // Exact: every F_k within the kernel's stated bound 4ε(F + 1/S) of the
+    // oracle, IDs equal, no discontinuity; F1..F4 also within 1e-6.
+    assert!(report.is_exact(), "{}", report.to_table());
+    for o in report.orders.iter().take(4) {
+        assert!(o.max_error <= 1e-6, "{}", report.to_table());
+    }
+    report
+}
+
+#[test]
+fn simd_agrees_with_brute_force_within_1e_6() {
+    let c = |order| Config { order, ..Config::default() };
+    check::<2, 1>(c(1), 200_000);
+    check::<3, 1>(c(1), 200_000);
+    check::<4, 1>(c(1), 100_000);
+    check::<2, 4>(c(4), 200_000);
+    check::<3, 4>(c(4), 200_000);
+    check::<4, 4>(c(4), 50_000);
+    check::<2, 8>(c(8), 50_000);
+    check::<3, 8>(c(8), 50_000);
+}
+
+#[test]
+fn simd_agrees_for_every_metric_and_widens_when_needed() {
+    for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
+        check::<3, 2>(Config { order: 2, metric, seed: 4, ..Config::default() }, 30_000);
+        check::<2, 8>(Config { order: 8, metric, seed: 4, ..Config::default() }, 20_000);
+    }
+    // Low density: most F8 samples need the wider search.
+    let r = check::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() }, 20_000);
+    assert!(r.orders[7].needs_wider > 5_000);
+}
+
+fn assert_same<const D: usize, const N: usize>(a: &Features32<D, N>, b: &Features32<D, N>, what: &str) {
+    assert_eq!(a.distance.map(f32::to_bits), b.distance.map(f32::to_bits), "{what}: distances");
+    assert_eq!(a.id, b.id, "{what}: ids");
+    assert_eq!(a.delta.map(|d| d.map(f32::to_bits)), b.delta.map(|d| d.map(f32::to_bits)), "{what}: deltas");
+}
+
+fn bit_identity<const D: usize, const N: usize>(config: Config) {
+    for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
+        let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+        for batch in 0..2000 {
+            let points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(3, batch * 8 + i, 50.0));
+            let eight = kernel.evaluate8(&points);
+            for (i, p) in points.iter().enumerate() {
+                assert_same(&kernel.evaluate(*p), &lane(&eight, i), &format!("{outputs:?} lane {i} at {p:?}"));
+            }
+        }
+    }
+}
+
+#[test]
+fn one_lane_and_eight_lanes_are_bit_identical() {
+    bit_identity::<2, 3>(Config { order: 3, ..Config::default() });
+    bit_identity::<3, 1>(Config::default());
+    bit_identity::<3, 4>(Config { order: 4, metric: Metric::Manhattan, ..Config::default() });
+    bit_identity::<4, 2>(Config { order: 2, metric: Metric::Chebyshev, ..Config::default() });
+    bit_identity::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
+    bit_identity::<3, 2>(Config { order: 2, mode: Mode::Window, ..Config::default() });
+}
+
+#[test]
+fn outputs_not_asked_for_are_not_reported_and_distances_do_not_change() {
+    let full = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    let bare = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
+    let x = [1.5, -2.25, 7.0];
+    let (a, b) = (full.evaluate(x), bare.evaluate(x));
+    assert_eq!(a.distance, b.distance);
+    assert_eq!(b.id, [INVALID_ID; 2]);
+    assert_eq!(b.delta, [[0.0; 3]; 2]);
+    assert!(a.id[0] != INVALID_ID && a.delta[0] != [0.0; 3]);
+}
+
+#[test]
+fn bad_lanes_give_nan_and_leave_their_neighbours_alone() {
+    let kernel = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    let good = [0.25, 10.5, -3.0];
+    let bad = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300];
+    for (slot, value) in bad.iter().enumerate() {
+        let mut points = [good; 8];
+        points[slot * 2][slot % 3] = *value;
+        let r = kernel.evaluate8(&points);
+        for i in 0..8 {
+            let got = lane(&r, i);
+            if i == slot * 2 {
+                assert!(got.distance.iter().all(|d| d.is_nan()), "{value}");
+                assert_eq!(got.id, [INVALID_ID; 2]);
+                assert!(got.delta.iter().flatten().all(|d| d.is_nan()));
+            } else {
+                assert_same(&got, &kernel.evaluate(good), "good lane");
+            }
+        }
+    }
+}
+
+#[test]
+fn an_order_other_than_the_compiled_one_is_rejected() {
+    let err = Simd::<3, 2>::new(Config { order: 3, ..Config::default() }, Outputs::Distances).unwrap_err();
+    assert!(err.to_string().contains("compiled for order 2"), "{err}");
+    assert!(Simd::<3, 2>::new(Config { order: 2, density: -1.0, ..Config::default() }, Outputs::Distances).is_err());
+}
+
+#[test]
+fn hard_values_in_every_lane_match_the_reference_within_1e_6() {
+    // Far from the origin the f32 kernel keeps its precision because the
+    // sample is located in f64 and distances are taken relative to its cell.
+    let config = Config { order: 4, ..Config::default() };
+    let kernel = Simd::<3, 4>::new(config, Outputs::Ids).unwrap();
+    let reference = worley::Reference::<3>::new(config).unwrap();
+    let s = kernel.pattern().scale();
+    let values = [
+        0.0,
+        -0.0,
+        1.0 / s,
+        -1.0 / s,
+        8_388_608.0,
+        16_777_216.5,
+        -1e9,
+        2_147_483_647.75 / s,
+        2_147_483_648.25 / s,
+        -1e7,
+        1e12,
+    ];
+    for v in values {
+        for slot in 0..8 {
+            for axis in 0..3 {
+                let mut points = [[0.3, 0.6, 0.9]; 8];
+                points[slot][axis] = v;
+                let got = lane(&kernel.evaluate8(&points), slot);
+                let want = reference.evaluate(points[slot]);
+                for k in 0..4 {
+                    let err = (got.distance[k] as f64 - want.distance[k]).abs();
+                    assert!(err <= 1e-6, "{v} in lane {slot}, axis {axis}: F{} off by {err}", k + 1);
+                }
+            }
+        }
+    }
+}
