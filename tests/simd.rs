@@ -151,3 +151,19 @@ fn hard_values_in_every_lane_match_the_reference_within_1e_6() {
         }
     }
 }
+
+#[test]
+fn glam_entry_points_give_the_same_bits_as_arrays() {
+    let c = |order| Config { order, ..Config::default() };
+    let k3 = Simd::<3, 2>::new(c(2), Outputs::IdsAndDeltas).unwrap();
+    let p = glam::Vec3::new(1.25, -7.5, 300.125);
+    assert_same(&k3.evaluate_vec3(p), &k3.evaluate_f32(p.to_array()), "Vec3");
+    assert_same(&k3.evaluate_vec3a(p.into()), &k3.evaluate_f32(p.to_array()), "Vec3A");
+    let eight = k3.evaluate8_vec3(&[p; 8]);
+    assert_same(&lane(&eight, 5), &k3.evaluate_f32(p.to_array()), "[Vec3; 8]");
+    let k2 = Simd::<2, 1>::new(c(1), Outputs::Ids).unwrap();
+    assert_same(&k2.evaluate_vec2(glam::Vec2::new(3.0, -4.0)), &k2.evaluate([3.0, -4.0]), "Vec2");
+    let k4 = Simd::<4, 1>::new(c(1), Outputs::Ids).unwrap();
+    let q = glam::Vec4::new(0.5, 1.5, -2.5, 9.0);
+    assert_same(&k4.evaluate_vec4(q), &k4.evaluate_f32(q.to_array()), "Vec4");
+}

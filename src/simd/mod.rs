@@ -547,3 +547,34 @@ impl Metric32 for Minkowski {
         per_lane::<L>(d, |x| x.powf(p))
     }
 }
+
+impl<const N: usize> Simd<2, N> {
+    /// One point given as a `glam::Vec2`.
+    pub fn evaluate_vec2(&self, p: glam::Vec2) -> Features32<2, N> {
+        self.evaluate_f32(p.to_array())
+    }
+}
+
+impl<const N: usize> Simd<3, N> {
+    /// One point given as a `glam::Vec3`.
+    pub fn evaluate_vec3(&self, p: glam::Vec3) -> Features32<3, N> {
+        self.evaluate_f32(p.to_array())
+    }
+
+    /// One point given as a `glam::Vec3A`.
+    pub fn evaluate_vec3a(&self, p: glam::Vec3A) -> Features32<3, N> {
+        self.evaluate_f32(p.to_array())
+    }
+
+    /// Eight points given as `glam::Vec3`s.
+    pub fn evaluate8_vec3(&self, p: &[glam::Vec3; 8]) -> Features8<3, N> {
+        self.evaluate8(&p.map(|v| v.to_array().map(f64::from)))
+    }
+}
+
+impl<const N: usize> Simd<4, N> {
+    /// One point given as a `glam::Vec4`.
+    pub fn evaluate_vec4(&self, p: glam::Vec4) -> Features32<4, N> {
+        self.evaluate_f32(p.to_array())
+    }
+}
