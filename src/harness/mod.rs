@@ -117,7 +117,9 @@ pub fn widen_features<const D: usize, const N: usize>(r: &crate::simd::Features3
         out.delta[k] = r.delta[k].map(f64::from);
         out.id[k] = r.id[k];
     }
-    out.shells = 1;
+    // The SIMD kernel does not report how far it searched: 0 marks that
+    // unknown, and the report then shows the widened share as n/a.
+    out.shells = 0;
     out
 }
 
@@ -220,7 +222,8 @@ pub fn throughput_and_statistics<const D: usize, K: Kernel<D>>(kernel: &K, campa
         start += n;
     }
     report.throughput = campaign.samples as f64 / seconds.max(1e-12);
-    report.widened = widened as f64 / campaign.samples.max(1) as f64;
+    // A kernel that reports no search radius (max_shells 0) has no widened share.
+    report.widened = if max_shells == 0 { f64::NAN } else { widened as f64 / campaign.samples.max(1) as f64 };
     report.max_shells = max_shells;
     report.mean_f1 = f1.iter().sum::<f64>() / f1.len().max(1) as f64;
     let config = kernel.config();

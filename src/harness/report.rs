@@ -50,7 +50,8 @@ pub struct Report {
     /// Mean F1 at cell centres over mean F1 at cell corners, minus one (NaN
     /// when the campaign sampled no cells).
     pub grid_bias: f64,
-    /// Fraction of the random samples whose search went beyond the 3^d block.
+    /// Fraction of the random samples whose search went beyond the 3^d block
+    /// (NaN for a kernel that does not report its search radius).
     pub widened: f64,
     /// Largest search radius seen (in cells).
     pub max_shells: u32,
@@ -118,12 +119,12 @@ impl Report {
         );
         let _ = writeln!(
             s,
-            "  {:.3} M samples/s (1 thread)   mean F1 {:.5}   KS {:.5}   grid bias {}   widened {:.4}%   max shells {}",
+            "  {:.3} M samples/s (1 thread)   mean F1 {:.5}   KS {:.5}   grid bias {}   widened {}   max shells {}",
             self.throughput / 1e6,
             self.mean_f1,
             self.ks,
             if self.grid_bias.is_nan() { "n/a".to_string() } else { format!("{:+.3}%", 100.0 * self.grid_bias) },
-            100.0 * self.widened,
+            if self.widened.is_nan() { "n/a".to_string() } else { format!("{:.4}%", 100.0 * self.widened) },
             self.max_shells
         );
         let _ = writeln!(

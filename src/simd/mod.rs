@@ -158,13 +158,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     pub fn evaluate(&self, x: [f64; D]) -> Features32<D, N> {
         let located = self.locate::<One>(&[x]);
         let best = self.dispatch::<One>(&located);
-        let mut out = Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [INVALID_ID; N] };
-        for k in 0..N {
-            out.distance[k] = best.rank[k];
-            out.id[k] = best.id[k];
-            out.delta[k] = best.delta[k];
-        }
-        out
+        Features32 { distance: best.rank, delta: best.delta, id: best.id }
     }
 
     /// One sample given in f32.
