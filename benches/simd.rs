@@ -18,7 +18,7 @@ fn order<const N: usize>(c: &mut Criterion, random: &[[f64; 3]], grid: &[[f64; 3
     let mut out = vec![Features32::<3, N> { distance: [0.0; N], delta: [[0.0; 3]; N], id: [0; N] }; POINTS];
     for (name, points) in [("random", random), ("grid", grid)] {
         group.bench_function(BenchmarkId::new("simd", name), |b| {
-            b.iter(|| simd.evaluate_slice(black_box(points), &mut out));
+            b.iter(|| simd.evaluate_slice(black_box(points), &mut out).unwrap());
         });
         group.bench_function(BenchmarkId::new("reference", name), |b| {
             b.iter(|| {

@@ -64,7 +64,7 @@
 //! ## Scale
 //! For a Poisson process of ρ points per unit volume, P(F1 > r) =
 //! exp(−ρ·V_d·r^d) (V_d the volume of the unit ball) and so
-//! E[F1] = Γ(1 + 1/d) / (ρ·V_d)^(1/d). With ρ = μ, the table's mean
+//! E(F1) = Γ(1 + 1/d) / (ρ·V_d)^(1/d). With ρ = μ, the table's mean
 //! population per cell, the scale S = Γ(1 + 1/d) / (μ·V_d)^(1/d) (cells per
 //! user unit) makes the Euclidean F1 have mean 1.0 in user units. All
 //! distances and delta vectors are reported in user units (cell-unit values

@@ -43,4 +43,4 @@ pub mod simd;
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Features, Reference};
-pub use simd::{simd_level, Features32, Features8, Outputs, Simd};
+pub use simd::{simd_level, Features32, Features8, Grid, Outputs, Point, Simd, SizeError};

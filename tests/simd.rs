@@ -167,3 +167,105 @@ fn glam_entry_points_give_the_same_bits_as_arrays() {
     let q = glam::Vec4::new(0.5, 1.5, -2.5, 9.0);
     assert_same(&k4.evaluate_vec4(q), &k4.evaluate_f32(q.to_array()), "Vec4");
 }
+
+#[test]
+fn slices_grids_and_parallel_batches_give_the_single_point_bits() {
+    use worley::Grid;
+    let kernel = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    let empty = Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] };
+    // 8197 points: a parallel tile boundary and a tail shorter than eight.
+    let points: Vec<[f64; 3]> = (0..8197).map(|i| sample_point(5, i, 300.0)).collect();
+    let mut serial = vec![empty; points.len()];
+    kernel.evaluate_slice(&points, &mut serial).unwrap();
+    let mut parallel = vec![empty; points.len()];
+    kernel.evaluate_slice_parallel(&points, &mut parallel).unwrap();
+    for (i, p) in points.iter().enumerate() {
+        let one = kernel.evaluate(*p);
+        assert_same(&serial[i], &one, &format!("slice point {i}"));
+        assert_same(&parallel[i], &one, &format!("parallel point {i}"));
+    }
+    // f32 and glam inputs through the slice API.
+    let small: Vec<glam::Vec3> =
+        points.iter().take(100).map(|p| glam::Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect();
+    let mut out = vec![empty; small.len()];
+    kernel.evaluate_slice(&small, &mut out).unwrap();
+    for (o, p) in out.iter().zip(&small) {
+        assert_same(o, &kernel.evaluate_vec3(*p), "Vec3 slice");
+    }
+    // A 67 × 41 × 3 grid: rows that are not a multiple of eight.
+    let grid = Grid { origin: [-3.5, 1e4, 0.25], step: [0.0625, 0.125, 0.5], size: [67, 41, 3] };
+    let n = grid.len().unwrap();
+    let mut a = vec![empty; n];
+    let mut b = vec![empty; n];
+    kernel.evaluate_grid(&grid, &mut a).unwrap();
+    kernel.evaluate_grid_parallel(&grid, &mut b).unwrap();
+    for i in 0..n {
+        let x = grid.point(i);
+        let (ix, iy, iz) = (i % 67, (i / 67) % 41, i / (67 * 41));
+        assert_eq!(x, [-3.5 + 0.0625 * ix as f64, 1e4 + 0.125 * iy as f64, 0.25 + 0.5 * iz as f64]);
+        let one = kernel.evaluate(x);
+        assert_same(&a[i], &one, &format!("grid point {i}"));
+        assert_same(&b[i], &one, &format!("parallel grid point {i}"));
+    }
+}
+
+#[test]
+fn buffers_of_the_wrong_size_are_an_error_and_nothing_is_written() {
+    use worley::{Grid, SizeError};
+    let kernel = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    let marker = Features32::<2, 1> { distance: [-7.0], delta: [[0.0; 2]], id: [7] };
+    let mut out = vec![marker; 3];
+    assert_eq!(kernel.evaluate_slice(&[[0.0f64; 2]; 4], &mut out), Err(SizeError { needed: 4, given: 3 }));
+    assert_eq!(kernel.evaluate_slice_parallel(&[[0.0f64; 2]; 4], &mut out), Err(SizeError { needed: 4, given: 3 }));
+    let grid = Grid { origin: [0.0; 2], step: [1.0; 2], size: [2, 2] };
+    assert_eq!(kernel.evaluate_grid(&grid, &mut out), Err(SizeError { needed: 4, given: 3 }));
+    assert_eq!(kernel.evaluate_grid_parallel(&grid, &mut out), Err(SizeError { needed: 4, given: 3 }));
+    assert!(out.iter().all(|o| o.distance[0] == -7.0));
+    let huge = Grid { origin: [0.0; 2], step: [1.0; 2], size: [usize::MAX, 2] };
+    assert!(kernel.evaluate_grid(&huge, &mut out).is_err());
+}
+
+#[test]
+fn large_worlds_keep_the_fraction_and_stay_within_the_stated_bound() {
+    use worley::Reference;
+    let config = Config { order: 3, ..Config::default() };
+    let kernel = Simd::<3, 3>::new(config, Outputs::Ids).unwrap();
+    let reference = Reference::<3>::new(config).unwrap();
+    let bound = |f: f64| 4.0 * f32::EPSILON as f64 * (f + 1.0 / kernel.pattern().scale());
+    // Cell plus fraction: the same bound at every distance from the origin.
+    let bases: [i64; 6] = [0, -1, 1 << 31, -(1 << 31) - 1, 1 << 40, (1 << 53) - 1];
+    for base in bases {
+        for i in 0..500 {
+            let u: [f64; 3] = sample_point(9, i, 1.0);
+            let fraction = u.map(|v| (v * 0.5 + 0.5) as f32);
+            let cell = [base, base.wrapping_neg().min(1 << 53), (i as i64) - 250];
+            let got = kernel.evaluate_in_cell(cell, fraction);
+            let want = reference.evaluate_in_cell(cell, fraction.map(f64::from));
+            for k in 0..3 {
+                let err = (got.distance[k] as f64 - want.distance[k]).abs();
+                assert!(err <= bound(want.distance[k]), "cell {cell:?} {fraction:?}: F{} off by {err}", k + 1);
+            }
+        }
+    }
+    // Eight lanes by cell agree with one.
+    let cells: [[i64; 3]; 8] = std::array::from_fn(|i| [1 << 45, -(i as i64), 3]);
+    let fractions: [[f32; 3]; 8] = std::array::from_fn(|i| [0.125 * i as f32, 0.5, 0.999]);
+    let eight = kernel.evaluate8_in_cell(&cells, &fractions);
+    for i in 0..8 {
+        assert_same(&lane(&eight, i), &kernel.evaluate_in_cell(cells[i], fractions[i]), "in-cell lane");
+    }
+    // Outside the documented domain: the invalid result.
+    for (cell, fraction) in [([0; 3], [1.5, 0.0, 0.0]), ([0; 3], [f32::NAN, 0.0, 0.0]), ([i64::MAX, 0, 0], [0.5; 3])] {
+        let r = kernel.evaluate_in_cell(cell, fraction);
+        assert!(r.distance.iter().all(|d| d.is_nan()) && r.id == [INVALID_ID; 3], "{cell:?} {fraction:?}");
+    }
+    // f64 user coordinates at |x| ≈ 1e7, 1e9 and 2^31 cells, through the
+    // harness against the brute-force oracle.
+    let s = kernel.pattern().scale();
+    for range in [1e7, 1e9, 2_147_483_648.0 / s * 1.5] {
+        let campaign = Campaign { seed: 8, samples: 0, oracle_samples: 20_000, range, pairs: 0, grid_cells: 0 };
+        let mut report = Report::new::<3>("simd".into(), &config, kernel.pattern(), &campaign);
+        harness::compare_with_oracle(&kernel, &campaign, &mut report);
+        assert!(report.is_exact(), "range {range}: {}", report.to_table());
+    }
+}

@@ -72,6 +72,10 @@ pub trait Lanes: Copy + 'static {
     fn u_shr13(a: Self::U) -> Self::U;
     /// a >> 8
     fn u_shr8(a: Self::U) -> Self::U;
+    /// a >> 24
+    fn u_shr24(a: Self::U) -> Self::U;
+    /// The largest lane (lanes are not NaN).
+    fn hmax(a: Self::F) -> f32;
     /// a as f32 for a < 2^24 (exact)
     fn u24_to_f(a: Self::U) -> Self::F;
 }
@@ -203,6 +207,14 @@ impl Lanes for One {
         a >> 8
     }
     #[inline(always)]
+    fn u_shr24(a: u32) -> u32 {
+        a >> 24
+    }
+    #[inline(always)]
+    fn hmax(a: f32) -> f32 {
+        a
+    }
+    #[inline(always)]
     fn u24_to_f(a: u32) -> f32 {
         a as i32 as f32
     }
@@ -316,8 +328,41 @@ impl Lanes for Eight {
         a >> 8_u32
     }
     #[inline(always)]
+    fn u_shr24(a: u32x8) -> u32x8 {
+        a >> 24_u32
+    }
+    #[inline(always)]
+    fn hmax(a: f32x8) -> f32 {
+        a.to_array().into_iter().fold(f32::NEG_INFINITY, f32::max)
+    }
+    #[inline(always)]
     fn u24_to_f(a: u32x8) -> f32x8 {
         let i: i32x8 = bytemuck::cast(a);
         f32x8::from_i32x8(i)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane multiply, whichever instructions `wide` compiled it to, is
+    /// the wrapping product of every lane.
+    #[test]
+    fn lane_multiply_is_the_wrapping_product() {
+        let mut state = 0x1234_5678_9ABC_DEF0u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 32) as u32
+        };
+        let edges = [0, 1, 0xFFFF, 0x1_0000, 0x8000_0000, u32::MAX, 0xFFFF_0000, 0x0000_FFFF];
+        for round in 0..20_000 {
+            let a: [u32; 8] = std::array::from_fn(|i| if round == 0 { edges[i] } else { next() });
+            let b: [u32; 8] = std::array::from_fn(|i| if round < 8 { edges[(i + round) % 8] } else { next() });
+            let got = Eight::u_mul(u32x8::new(a), u32x8::new(b)).to_array();
+            for i in 0..8 {
+                assert_eq!(got[i], a[i].wrapping_mul(b[i]), "{:#x} * {:#x}", a[i], b[i]);
+            }
+        }
     }
 }

@@ -4,22 +4,38 @@
 //! feature points bit for bit, computed in f32 lanes eight samples at a time.
 //!
 //! ## How
-//! - **Locating** a sample is done per lane in f64, exactly as the reference
-//!   does it (u = x·S, c = ⌊u⌋ as `i64`), so the cell is the reference's and
-//!   the fraction f ∈ [0, 1] loses only its rounding to f32. Distances are
-//!   then computed in f32 relative to the sample's own cell, so precision does
-//!   not depend on how far the sample is from the origin.
+//! - **Locating** a sample is done in f64, exactly as the reference does it
+//!   (u = x·S, c = ⌊u⌋), so the cell is the reference's and the fraction
+//!   f ∈ [0, 1] loses only its rounding to f32. When every lane is within
+//!   2^31 cells of the origin this is straight-line code that vectorises (the
+//!   floor by adding and subtracting 1.5·2^52, the cell's low word from the
+//!   bits of the sum); otherwise each lane goes through
+//!   [`Pattern::locate`] and the full i64 axis terms. Distances are then
+//!   computed in f32 relative to the sample's own cell, so precision does not
+//!   depend on how far the sample is from the origin.
+//! - **Units.** Lane geometry is held in units of 2^−24 cells, one step of
+//!   a feature point's fixed-point coordinate, so a coordinate is its 24-bit
+//!   integer converted exactly, with no multiply. Scaling by a power of two
+//!   is exact: every value is the cell-unit value times 2^24, bit for bit.
 //! - **The cell hash and the LCG** run in `u32` lanes. Each point coordinate
 //!   comes from the cell's state with one independent multiply-add
 //!   (s_k = A_k·s₀ + C_k, [`lcg_jump`]) instead of a chain of dependent
-//!   multiplies. The 24-bit fractions convert to f32 exactly.
-//! - **Divergence.** Cells of the 3^d block are visited in a fixed order
-//!   (own cell, faces, edges, corners). A cell is skipped when no lane needs
-//!   it (Worley's pruning per lane: the cell's nearest point is no closer than
-//!   that lane's F_n); otherwise its points are generated once for all lanes,
-//!   up to the largest population among the lanes, and each lane keeps only
-//!   its own candidates (masked). A lane's result therefore depends on that
-//!   lane alone, which is what makes one lane and eight lanes bit-identical.
+//!   multiplies.
+//! - **Populations.** The default table never decreases, so point j of a
+//!   cell exists exactly where the state's top byte reaches a threshold: one
+//!   compare in lanes, no table lookup. Points are produced while any lane
+//!   that needs the cell has one more. Bumped (unsorted) tables take a
+//!   lookup per lane.
+//! - **Divergence.** The 3^d block is visited in a mirrored frame per lane:
+//!   on each axis the lane's near neighbour (−1 if f < ½, else +1) comes
+//!   before the far one. Every lane visits its own cell, then the 2^d − 1
+//!   cells around its nearest lattice corner, then the far cells; a cell is
+//!   skipped when no lane needs it (Worley's pruning per lane: the cell's
+//!   nearest point is no closer than that lane's F_n), and the far cells are
+//!   skipped together when every lane's F_n is within its nearest far face.
+//!   The hashes of the own and near cells are computed up front, as
+//!   independent chains. A lane's result depends on that lane alone, which is
+//!   what makes one lane and eight lanes bit-identical.
 //! - **Exact.** After the block, a lane whose F_n is farther than the block's
 //!   outside takes the wider search, shell by shell, masked to the lanes that
 //!   still need it (a cold path: 0.03 % of samples for 3D F4 at λ 3).
@@ -27,6 +43,9 @@
 //!   generics; the metric and the outputs (distances, IDs, deltas) are
 //!   dispatched once per call into monomorphised loops, so nothing the caller
 //!   did not ask for is computed in the hot loop.
+//! - **Batches** ([`batch`]): slices of any [`Point`] type, regular
+//!   [`Grid`]s, rayon tiles (feature `parallel`) and points given as a cell
+//!   plus a fraction for large worlds.
 //!
 //! ## Build flags
 //! `wide` chooses its instructions at compile time only. Build with
@@ -34,12 +53,15 @@
 //! [`simd_level`] reports what was compiled in. Results are bit-identical
 //! between builds: no operation used here differs between them.
 
+pub mod batch;
 pub mod lanes;
+
+pub use batch::{Grid, Point, SizeError, TILE};
 
 use wide::{f32x8, u32x8};
 
 use crate::config::{Config, ConfigError, Metric, Mode};
-use crate::definition::{axis_term, lcg_jump, Pattern, AXIS_MUL, FRACTION_ULP, INVALID_ID, TABLE_SIZE};
+use crate::definition::{axis_term, lcg_jump, Pattern, AXIS_MUL, FRACTION_BITS, INVALID_ID, TABLE_SIZE};
 use crate::reference::{shell, MAX_SHELLS};
 use lanes::{Eight, Lanes, One};
 
@@ -98,17 +120,30 @@ pub struct Simd<const D: usize, const N: usize> {
     pattern: Pattern<D>,
     outputs: Outputs,
     table: [u8; TABLE_SIZE],
-    /// (A_k, C_k) for every LCG state a point can use.
-    jump: Vec<(u32, u32)>,
-    /// The 3^d block: own cell, then faces, edges, corners.
+    /// Whether the table never decreases, so that populations come from
+    /// each point's threshold in lanes.
+    sorted: bool,
+    /// What the kernel needs to produce point j of a cell, for every j the
+    /// table allows.
+    points: Vec<PointConstants<D>>,
+    /// The 3^d block in the mirrored frame (see `search`).
     block: Vec<[i64; D]>,
+    /// How many leading cells of `block` have no far axis.
+    near: usize,
     inv_scale: f32,
 }
 
-/// A lane's located sample: its cell (per axis, per lane) and fraction.
+/// A lane's located sample: the axis terms of the cells around it and its
+/// fraction in its own cell.
 struct Located<L: Lanes, const D: usize> {
-    cell: [[i64; 8]; D],
+    /// Axis terms of the cells at offsets −1, 0, +1, per axis.
+    terms: [[L::U; 3]; D],
+    /// The fraction f ∈ [0, 1] per axis, rounded to f32.
     f: [L::F; D],
+    /// Cells per axis and lane, kept only when some lane is outside the fast
+    /// range (the wide search recomputes them from the terms otherwise).
+    cell: Option<[[i64; 8]; D]>,
+    /// Lanes with a valid input.
     valid: [bool; 8],
 }
 
@@ -118,6 +153,32 @@ struct Best<L: Lanes, const D: usize, const N: usize> {
     delta: [[L::F; D]; N],
     id: [L::U; N],
 }
+
+/// 2^24: lane geometry is held in units of one fixed-point step of a
+/// feature-point coordinate, so that a coordinate is its 24-bit integer
+/// converted exactly, with no multiply. Scaling by a power of two is exact,
+/// so every value is the cell-unit value times 2^24, bit for bit.
+const UNIT: f32 = (1u32 << FRACTION_BITS) as f32;
+
+/// The LCG constants of one point index j: (A_k, C_k) for its ID state and
+/// its coordinate states.
+#[derive(Clone, Copy, Debug)]
+struct PointConstants<const D: usize> {
+    /// Sorted tables: the point exists where the top byte exceeds this.
+    threshold: f32,
+    /// j as f32, compared with per-lane counts of unsorted tables.
+    index: f32,
+    id: (u32, u32),
+    coordinate: [(u32, u32); D],
+}
+
+/// 1.5·2^52: adding and subtracting it rounds an f64 below 2^51 in magnitude
+/// to an integer, and the integer's low 32 bits are then the sum's low bits.
+const ROUNDING: f64 = 6_755_399_441_055_744.0;
+
+/// Largest |u| located in lanes: the cell and both its neighbours stay in
+/// the i32 range, where the axis term is the cell's low word.
+const FAST_RANGE: f64 = 2_147_483_645.0;
 
 impl<const D: usize, const N: usize> Simd<D, N> {
     /// Builds the evaluator. `config.order` must equal `N`.
@@ -130,13 +191,25 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
         let pattern = Pattern::<D>::new(&config)?;
         let table = *pattern.table().entries();
-        let states = pattern.table().max_population() * (D as u32 + 1) + 1;
-        let jump = (0..=states).map(lcg_jump).collect();
-        let mut block = shell::<D>(1);
-        block.sort_by_key(|o| o.iter().filter(|&&v| v != 0).count());
-        block.insert(0, [0; D]);
+        let most = pattern.table().max_population();
+        let sorted = table.windows(2).all(|w| w[0] <= w[1]);
+        let points = (0..most)
+            .map(|j| {
+                let base = 1 + j * (D as u32 + 1);
+                PointConstants {
+                    // In a sorted table, point j exists where the state's top
+                    // byte reaches the first entry above j.
+                    threshold: table.iter().position(|&n| u32::from(n) > j).map_or(f32::INFINITY, |b| b as f32 - 0.5),
+                    index: j as f32,
+                    id: lcg_jump(base),
+                    coordinate: std::array::from_fn(|a| lcg_jump(base + 1 + a as u32)),
+                }
+            })
+            .collect();
+        let block = logical_block::<D>();
+        let near = block.iter().take_while(|o| o.iter().all(|&v| v <= 0)).count();
         let inv_scale = (1.0 / pattern.scale()) as f32;
-        Ok(Simd { config, pattern, outputs, table, jump, block, inv_scale })
+        Ok(Simd { config, pattern, outputs, table, sorted, points, block, near, inv_scale })
     }
 
     /// The configuration.
@@ -180,21 +253,45 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         self.evaluate8(&points)
     }
 
-    /// Many samples into a caller's buffer (`out.len() >= xs.len()`), eight
-    /// at a time; a tail shorter than eight is padded.
-    pub fn evaluate_slice(&self, xs: &[[f64; D]], out: &mut [Features32<D, N>]) {
-        assert!(out.len() >= xs.len(), "output buffer shorter than input");
-        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
-            let mut block = [[0.0; D]; 8];
-            block[..chunk.len()].copy_from_slice(chunk);
-            let r = self.evaluate8(&block);
-            for (i, o) in dst.iter_mut().take(chunk.len()).enumerate() {
-                *o = lane(&r, i);
+    /// Locates every lane. The common case (every lane valid and within
+    /// [`FAST_RANGE`] cells of the origin) runs as straight-line f64 code
+    /// that vectorises: the floor by the rounding constant, the axis term
+    /// from the bits of the rounded sum. Anything else takes the per-lane
+    /// path through [`Pattern::locate`]. Both give the reference's cell and
+    /// the reference's f64 fraction, rounded to f32.
+    #[inline(always)]
+    fn locate<L: Lanes>(&self, xs: &[[f64; D]]) -> Located<L, D> {
+        let scale = self.pattern.scale();
+        let mut lo = [[0u32; 8]; D];
+        let mut f = [[0f32; 8]; D];
+        let mut fast = true;
+        for a in 0..D {
+            for i in 0..L::N {
+                let u = xs[i][a] * scale;
+                let r = (u + ROUNDING) - ROUNDING;
+                let floor = if r > u { r - 1.0 } else { r };
+                lo[a][i] = (floor + ROUNDING).to_bits() as u32;
+                f[a][i] = (u - floor) as f32 * UNIT;
+                fast &= u.abs() < FAST_RANGE;
             }
+        }
+        if !fast {
+            return self.locate_lanewise(xs);
+        }
+        Located {
+            terms: std::array::from_fn(|a| {
+                let t = L::u_load(&lo[a][..L::N]);
+                [L::u_add(t, L::u(u32::MAX)), t, L::u_add(t, L::u(1))]
+            }),
+            f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
+            cell: None,
+            valid: [true; 8],
         }
     }
 
-    fn locate<L: Lanes>(&self, xs: &[[f64; D]]) -> Located<L, D> {
+    #[inline(never)]
+    #[cold]
+    fn locate_lanewise<L: Lanes>(&self, xs: &[[f64; D]]) -> Located<L, D> {
         let mut cell = [[0i64; 8]; D];
         let mut f = [[0f32; 8]; D];
         let mut valid = [false; 8];
@@ -203,15 +300,21 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 valid[i] = true;
                 for a in 0..D {
                     cell[a][i] = c[a];
-                    f[a][i] = fr[a] as f32;
+                    f[a][i] = fr[a] as f32 * UNIT;
                 }
             }
         }
-        Located { cell, f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])), valid }
+        Located {
+            terms: std::array::from_fn(|a| std::array::from_fn(|o| terms::<L>(&cell[a], o as i64 - 1))),
+            f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
+            cell: Some(cell),
+            valid,
+        }
     }
 
     /// Picks the monomorphised kernel for the metric and outputs, then
     /// converts ranks to distances and marks bad lanes.
+    #[inline(always)]
     fn dispatch<L: Lanes>(&self, at: &Located<L, D>) -> Best<L, D, N> {
         let mut best = match (self.config.metric, self.outputs) {
             (Metric::Euclidean, Outputs::Distances) => self.search::<L, Euclid, false, false>(Euclid, at),
@@ -221,12 +324,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev>(Chebyshev, o, at),
             (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski>(Minkowski(p as f32), o, at),
         };
-        let inv = L::f(self.inv_scale);
+        let (unit, inv) = (L::f(1.0 / UNIT), L::f(self.inv_scale));
         let metric = self.config.metric;
         for k in 0..N {
-            best.rank[k] = L::mul(distance_of_rank::<L>(metric, best.rank[k]), inv);
+            best.rank[k] = L::mul(L::mul(distance_of_rank::<L>(metric, best.rank[k]), unit), inv);
             for a in 0..D {
-                best.delta[k][a] = L::mul(best.delta[k][a], inv);
+                best.delta[k][a] = L::mul(L::mul(best.delta[k][a], unit), inv);
             }
         }
         if at.valid[..L::N].iter().any(|v| !v) {
@@ -244,6 +347,13 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// The kernel: the 3^d block, then the certified widening.
+    ///
+    /// The block is visited in a per-lane mirrored frame: on each axis a
+    /// lane's *near* neighbour (offset −1 if f < ½, else +1) comes first. In
+    /// that frame every lane visits its own cell, then the 2^d − 1 cells
+    /// around its nearest lattice corner, then the cells on the far sides,
+    /// so the lanes agree on which visits still matter and all of them can
+    /// usually stop after the near cells.
     #[inline(always)]
     fn search<L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
@@ -252,16 +362,63 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     ) -> Best<L, D, N> {
         let mut best =
             Best::<L, D, N> { rank: [L::f(f32::INFINITY); N], delta: [[L::f(0.0); D]; N], id: [L::u(INVALID_ID); N] };
-        // Axis terms of the cells at offsets −1, 0, +1, per axis and lane.
-        let terms: [[L::U; 3]; D] =
-            std::array::from_fn(|a| std::array::from_fn(|o| self.terms::<L>(at, a, o as i64 - 1)));
-        let all = L::lt(L::f(0.0), L::f(1.0));
-        for offset in &self.block {
-            let t: [L::U; D] = std::array::from_fn(|a| terms[a][(offset[a] + 1) as usize]);
-            self.visit::<L, M, IDS, DELTAS>(metric, t, offset, &at.f, all, &mut best);
+        let one = L::f(UNIT);
+        // Per axis, indexed by the mirrored offset + 1 (near, own, far): the
+        // axis term, the sample minus the cell's corner, and the metric's
+        // term of the gap between the sample and the cell.
+        let mut terms = [[L::u(0); 3]; D];
+        let mut shifted = [[L::f(0.0); 3]; D];
+        let mut gap = [[L::f(0.0); 3]; D];
+        for a in 0..D {
+            let f = at.f[a];
+            let flip = L::lt(L::f(0.5 * UNIT), f);
+            let t = at.terms[a];
+            terms[a] = [L::select_u(flip, t[2], t[0]), t[1], L::select_u(flip, t[0], t[2])];
+            let (below, above) = (L::add(f, one), L::sub(f, one));
+            shifted[a] = [L::select(flip, above, below), f, L::select(flip, below, above)];
+            let rest = L::sub(one, f);
+            gap[a] =
+                [metric.term::<L>(L::select(flip, rest, f)), L::f(0.0), metric.term::<L>(L::select(flip, f, rest))];
+        }
+        let all = L::lt(L::f(0.0), one);
+        // The hashes of the own and near cells are computed up front: they
+        // are almost always needed, and as independent chains of multiplies
+        // they overlap instead of waiting on each other.
+        let mut near = [L::u(0); 16];
+        for (h, offset) in near.iter_mut().zip(&self.block[..self.near]) {
+            *h = self.hash::<L>(std::array::from_fn(|a| terms[a][(offset[a] + 1) as usize]));
+        }
+        for (step, offset) in self.block.iter().enumerate() {
+            if step == self.near {
+                // Every remaining cell is on a far side of some axis.
+                let mut nearest_far = gap[0][2];
+                for g in &gap[1..] {
+                    nearest_far = L::min(nearest_far, g[2]);
+                }
+                if !L::any(L::lt(nearest_far, best.rank[N - 1])) {
+                    break;
+                }
+            }
+            let index: [usize; D] = std::array::from_fn(|a| (offset[a] + 1) as usize);
+            let needs = if step == 0 {
+                all
+            } else {
+                let mut rank = gap[0][index[0]];
+                for a in 1..D {
+                    rank = metric.fold::<L>(rank, gap[a][index[a]]);
+                }
+                L::lt(rank, best.rank[N - 1])
+            };
+            if !L::any(needs) {
+                continue;
+            }
+            let h =
+                if step < self.near { near[step] } else { self.hash::<L>(std::array::from_fn(|a| terms[a][index[a]])) };
+            let sh: [L::F; D] = std::array::from_fn(|a| shifted[a][index[a]]);
+            self.visit::<L, M, IDS, DELTAS>(metric, h, sh, needs, &mut best);
         }
         if self.config.mode == Mode::Exact {
-            let open = L::lt(metric.rank_of_distance::<L>(outside::<L, D>(&at.f, 1.0)), best.rank[N - 1]);
+            let open = L::lt(metric.rank_of_distance::<L>(outside::<L, D>(&at.f, UNIT)), best.rank[N - 1]);
             if L::any(open) {
                 self.widen::<L, M, IDS, DELTAS>(metric, at, open, &mut best);
             }
@@ -278,12 +435,33 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         mut open: L::M,
         best: &mut Best<L, D, N>,
     ) {
+        let cell = at.cell.unwrap_or_else(|| {
+            std::array::from_fn(|a| {
+                let mut lo = [0u32; 8];
+                L::u_store(at.terms[a][1], &mut lo[..L::N]);
+                lo.map(|t| i64::from(t as i32))
+            })
+        });
         for r in 2..=MAX_SHELLS {
             for offset in shell::<D>(r) {
-                let t: [L::U; D] = std::array::from_fn(|a| self.terms::<L>(at, a, offset[a]));
-                self.visit::<L, M, IDS, DELTAS>(metric, t, &offset, &at.f, open, best);
+                let t: [L::U; D] = std::array::from_fn(|a| terms::<L>(&cell[a], offset[a]));
+                let gaps: [L::F; D] = std::array::from_fn(|a| {
+                    let o = offset[a];
+                    if o > 0 {
+                        L::sub(L::f(o as f32 * UNIT), at.f[a])
+                    } else if o < 0 {
+                        L::sub(at.f[a], L::f((o + 1) as f32 * UNIT))
+                    } else {
+                        L::f(0.0)
+                    }
+                });
+                let needs = L::and(open, L::lt(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
+                if L::any(needs) {
+                    let sh: [L::F; D] = std::array::from_fn(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
+                    self.visit::<L, M, IDS, DELTAS>(metric, self.hash::<L>(t), sh, needs, best);
+                }
             }
-            let edge = metric.rank_of_distance::<L>(outside::<L, D>(&at.f, r as f32));
+            let edge = metric.rank_of_distance::<L>(outside::<L, D>(&at.f, r as f32 * UNIT));
             open = L::and(open, L::lt(edge, best.rank[N - 1]));
             if !L::any(open) {
                 return;
@@ -296,43 +474,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
     }
 
-    /// Per-lane axis terms of the cells at `offset` along axis `a`.
+    /// The cell hash (see [`definition`](crate::definition)) in u32 lanes,
+    /// from the cell's axis terms.
     #[inline(always)]
-    fn terms<L: Lanes>(&self, at: &Located<L, D>, a: usize, offset: i64) -> L::U {
-        let mut t = [0u32; 8];
-        for (ti, c) in t.iter_mut().zip(at.cell[a]).take(L::N) {
-            *ti = axis_term(c.wrapping_add(offset));
-        }
-        L::u_load(&t[..L::N])
-    }
-
-    /// Visits one cell for the lanes in `mask` that it can still improve.
-    #[inline(always)]
-    fn visit<L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool>(
-        &self,
-        metric: M,
-        terms: [L::U; D],
-        offset: &[i64; D],
-        f: &[L::F; D],
-        mask: L::M,
-        best: &mut Best<L, D, N>,
-    ) {
-        // Pruning: the cell's nearest point against each lane's F_n.
-        let gaps: [L::F; D] = std::array::from_fn(|a| {
-            let o = offset[a];
-            if o > 0 {
-                L::sub(L::f(o as f32), f[a])
-            } else if o < 0 {
-                L::sub(f[a], L::f((o + 1) as f32))
-            } else {
-                L::f(0.0)
-            }
-        });
-        let needs = L::and(mask, L::lt(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
-        if !L::any(needs) {
-            return;
-        }
-        // The cell hash (see `definition`), in u32 lanes.
+    fn hash<L: Lanes>(&self, terms: [L::U; D]) -> L::U {
         let keys = self.pattern.keys();
         let mut h = L::u(keys.init);
         for (t, m) in terms.iter().zip(AXIS_MUL) {
@@ -344,31 +489,41 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         h = L::u_mul(h, L::u(0x85EB_CA6B));
         h = L::u_xor(h, L::u_shr13(h));
         h = L::u_mul(h, L::u(0xC2B2_AE35));
-        h = L::u_xor(h, L::u_shr16(h));
-        // Populations: a table lookup per lane (there is no gather).
-        let mut hs = [0u32; 8];
-        L::u_store(h, &mut hs[..L::N]);
-        let mut counts = [0f32; 8];
-        let mut most = 0u8;
-        for (c, s) in counts.iter_mut().zip(hs).take(L::N) {
-            let n = self.table[(s >> 24) as usize];
-            *c = n as f32;
-            most = most.max(n);
-        }
-        let count = L::f_load(&counts[..L::N]);
-        let shifted: [L::F; D] = std::array::from_fn(|a| L::sub(f[a], L::f(offset[a] as f32)));
-        let ulp = L::f(FRACTION_ULP as f32);
-        for j in 0..most as usize {
-            let active = L::and(needs, L::lt(L::f(j as f32), count));
-            let base = 1 + j * (D + 1);
+        L::u_xor(h, L::u_shr16(h))
+    }
+
+    /// Visits one cell for the lanes in `needs`: `h` is its hash, `shifted`
+    /// the sample minus the cell's corner, per lane.
+    #[inline(always)]
+    fn visit<L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        h: L::U,
+        shifted: [L::F; D],
+        needs: L::M,
+        best: &mut Best<L, D, N>,
+    ) {
+        // The population's top byte, exact in f32. Points are produced in
+        // index order while some lane that needs the cell has one more.
+        let top = L::u24_to_f(L::u_shr24(h));
+        let counts = if self.sorted { None } else { Some(self.counts::<L>(top)) };
+        for p in &self.points {
+            let exists = match counts {
+                None => L::lt(L::f(p.threshold), top),
+                Some(c) => L::lt(L::f(p.index), c),
+            };
+            let active = L::and(needs, exists);
+            if !L::any(active) {
+                break;
+            }
             let delta: [L::F; D] = std::array::from_fn(|a| {
-                let (am, cm) = self.jump[base + 1 + a];
+                let (am, cm) = p.coordinate[a];
                 let s = L::u_add(L::u_mul(h, L::u(am)), L::u(cm));
-                L::sub(shifted[a], L::mul(L::u24_to_f(L::u_shr8(s)), ulp))
+                L::sub(shifted[a], L::u24_to_f(L::u_shr8(s)))
             });
             let rank = L::select(active, metric.rank::<L, D>(&delta), L::f(f32::INFINITY));
             let id = if IDS {
-                let (am, cm) = self.jump[base];
+                let (am, cm) = p.id;
                 L::u_add(L::u_mul(h, L::u(am)), L::u(cm))
             } else {
                 L::u(0)
@@ -376,6 +531,41 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             best.insert::<IDS, DELTAS>(rank, delta, id);
         }
     }
+
+    /// Populations of an unsorted (bumped) table: a lookup per lane.
+    #[inline(never)]
+    fn counts<L: Lanes>(&self, top: L::F) -> L::F {
+        let mut c = [0f32; 8];
+        L::f_store(top, &mut c[..L::N]);
+        for v in c.iter_mut().take(L::N) {
+            *v = f32::from(self.table[*v as usize]);
+        }
+        L::f_load(&c[..L::N])
+    }
+}
+
+/// The 3^d block in the mirrored frame (−1 is the near side), ordered by the
+/// number of far axes, then of near axes: own cell, the near cells, then the
+/// far ones.
+fn logical_block<const D: usize>() -> Vec<[i64; D]> {
+    let mut block = shell::<D>(1);
+    block.push([0; D]);
+    block.sort_by_key(|o| {
+        let far = o.iter().filter(|&&v| v > 0).count();
+        let near = o.iter().filter(|&&v| v < 0).count();
+        (far, near, *o)
+    });
+    block
+}
+
+/// Per-lane axis terms of the cells at `offset` from `cell`.
+#[inline(always)]
+fn terms<L: Lanes>(cell: &[i64; 8], offset: i64) -> L::U {
+    let mut t = [0u32; 8];
+    for (ti, c) in t.iter_mut().zip(cell).take(L::N) {
+        *ti = axis_term(c.wrapping_add(offset));
+    }
+    L::u_load(&t[..L::N])
 }
 
 impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
@@ -411,7 +601,7 @@ impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
 fn outside<L: Lanes, const D: usize>(f: &[L::F; D], r: f32) -> L::F {
     let mut b = L::f(f32::INFINITY);
     for fa in f {
-        b = L::min(b, L::min(L::add(*fa, L::f(r)), L::sub(L::f(r + 1.0), *fa)));
+        b = L::min(b, L::min(L::add(*fa, L::f(r)), L::sub(L::f(r + UNIT), *fa)));
     }
     b
 }
@@ -420,7 +610,7 @@ fn distance_of_rank<L: Lanes>(metric: Metric, r: L::F) -> L::F {
     match metric {
         Metric::Euclidean => L::sqrt(r),
         Metric::Manhattan | Metric::Chebyshev => r,
-        Metric::Minkowski(p) => per_lane::<L>(r, |v| v.powf(1.0 / p as f32)),
+        Metric::Minkowski(p) => per_lane::<L>(r, |v| v.powf(1.0 / p as f32) * UNIT),
     }
 }
 
@@ -459,12 +649,24 @@ pub fn lane<const D: usize, const N: usize>(r: &Features8<D, N>, i: usize) -> Fe
     }
 }
 
-/// A metric in lanes; the rank is the reference's (squared distance, Σ|d|^p).
+/// A metric in lanes; the rank is the reference's (squared distance, Σ|d|^p,
+/// max |d|): the fold of one term per axis.
 pub trait Metric32: Copy {
-    /// Rank of a vector.
-    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F;
+    /// One axis's term of the rank: x², |x| or |x|^p.
+    fn term<L: Lanes>(&self, x: L::F) -> L::F;
+    /// Combines two partial ranks: a sum, or a maximum for Chebyshev.
+    fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F;
     /// Rank of a length.
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F;
+    /// Rank of a vector: the axes' terms folded in axis order.
+    #[inline(always)]
+    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
+        let mut s = self.term::<L>(v[0]);
+        for x in &v[1..] {
+            s = self.fold::<L>(s, self.term::<L>(*x));
+        }
+        s
+    }
 }
 
 /// Euclidean in lanes.
@@ -482,12 +684,12 @@ pub struct Minkowski(pub f32);
 
 impl Metric32 for Euclid {
     #[inline(always)]
-    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
-        let mut s = L::mul(v[0], v[0]);
-        for x in &v[1..] {
-            s = L::add(s, L::mul(*x, *x));
-        }
-        s
+    fn term<L: Lanes>(&self, x: L::F) -> L::F {
+        L::mul(x, x)
+    }
+    #[inline(always)]
+    fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
+        L::add(a, b)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
@@ -497,12 +699,12 @@ impl Metric32 for Euclid {
 
 impl Metric32 for Manhattan {
     #[inline(always)]
-    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
-        let mut s = L::abs(v[0]);
-        for x in &v[1..] {
-            s = L::add(s, L::abs(*x));
-        }
-        s
+    fn term<L: Lanes>(&self, x: L::F) -> L::F {
+        L::abs(x)
+    }
+    #[inline(always)]
+    fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
+        L::add(a, b)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
@@ -512,12 +714,12 @@ impl Metric32 for Manhattan {
 
 impl Metric32 for Chebyshev {
     #[inline(always)]
-    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
-        let mut s = L::abs(v[0]);
-        for x in &v[1..] {
-            s = L::max(s, L::abs(*x));
-        }
-        s
+    fn term<L: Lanes>(&self, x: L::F) -> L::F {
+        L::abs(x)
+    }
+    #[inline(always)]
+    fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
+        L::max(a, b)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
@@ -526,19 +728,20 @@ impl Metric32 for Chebyshev {
 }
 
 impl Metric32 for Minkowski {
+    // Ranks in cells^p rather than units^p: 2^24p would overflow f32.
     #[inline(always)]
-    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
+    fn term<L: Lanes>(&self, x: L::F) -> L::F {
         let p = self.0;
-        let mut s = per_lane::<L>(v[0], |x| x.abs().powf(p));
-        for x in &v[1..] {
-            s = L::add(s, per_lane::<L>(*x, |x| x.abs().powf(p)));
-        }
-        s
+        per_lane::<L>(x, |x| (x.abs() * (1.0 / UNIT)).powf(p))
+    }
+    #[inline(always)]
+    fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
+        L::add(a, b)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
         let p = self.0;
-        per_lane::<L>(d, |x| x.powf(p))
+        per_lane::<L>(d, |x| (x * (1.0 / UNIT)).powf(p))
     }
 }
 

@@ -1,0 +1,243 @@
+//! Batches for the SIMD kernel: slices, regular grids, rayon tiles and
+//! points given as a cell plus a fraction. Every entry point feeds the same
+//! 8-lane kernel, so a point gives the same bits whichever way it arrives.
+
+use super::{Features32, Located, Simd, UNIT};
+use crate::definition::MAX_CELL_COORD;
+use crate::simd::lanes::{Eight, Lanes, One};
+
+/// A sample position the kernel accepts, converted to f64 user units.
+pub trait Point<const D: usize>: Copy {
+    /// The coordinates in f64 (exact for every implementor here).
+    fn coordinates(&self) -> [f64; D];
+}
+
+impl<const D: usize> Point<D> for [f64; D] {
+    #[inline(always)]
+    fn coordinates(&self) -> [f64; D] {
+        *self
+    }
+}
+
+impl<const D: usize> Point<D> for [f32; D] {
+    #[inline(always)]
+    fn coordinates(&self) -> [f64; D] {
+        self.map(f64::from)
+    }
+}
+
+macro_rules! glam_point {
+    ($d:literal, $($t:ty),*) => {$(
+        impl Point<$d> for $t {
+            #[inline(always)]
+            fn coordinates(&self) -> [f64; $d] {
+                self.to_array().map(f64::from)
+            }
+        }
+    )*};
+}
+glam_point!(2, glam::Vec2, glam::DVec2);
+glam_point!(3, glam::Vec3, glam::Vec3A, glam::DVec3);
+glam_point!(4, glam::Vec4, glam::DVec4);
+
+/// A regular grid of samples: point `i` (per axis, `i[a] < size[a]`) is at
+/// `origin[a] + step[a] · i[a]`, computed in f64. Points are stored with axis
+/// 0 fastest (an image row, then the next row, then the next slab).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid<const D: usize> {
+    /// The position of the first point, user units.
+    pub origin: [f64; D],
+    /// The spacing per axis, user units.
+    pub step: [f64; D],
+    /// The number of points per axis.
+    pub size: [usize; D],
+}
+
+impl<const D: usize> Grid<D> {
+    /// The number of points, or `None` if it overflows `usize`.
+    pub fn len(&self) -> Option<usize> {
+        self.size.iter().try_fold(1usize, |n, &s| n.checked_mul(s))
+    }
+
+    /// Whether the grid has no points.
+    pub fn is_empty(&self) -> bool {
+        self.size.contains(&0)
+    }
+
+    /// The position of the point with linear index `index` (axis 0 fastest).
+    pub fn point(&self, mut index: usize) -> [f64; D] {
+        std::array::from_fn(|a| {
+            let i = index % self.size[a].max(1);
+            index /= self.size[a].max(1);
+            self.origin[a] + self.step[a] * i as f64
+        })
+    }
+}
+
+/// The caller's output buffer does not match the input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SizeError {
+    /// Results the call produces.
+    pub needed: usize,
+    /// Length of the buffer given.
+    pub given: usize,
+}
+
+impl std::fmt::Display for SizeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "output buffer holds {} results, the input needs {}", self.given, self.needed)
+    }
+}
+
+impl std::error::Error for SizeError {}
+
+/// Points per rayon task in the parallel batches: large enough that a task
+/// is worth scheduling, small enough that two cores share the tail evenly.
+pub const TILE: usize = 4096;
+
+impl<const D: usize, const N: usize> Simd<D, N> {
+    /// Many samples into a caller's buffer, eight at a time (a tail shorter
+    /// than eight is padded). Results are the same as [`Simd::evaluate`]'s.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+    pub fn evaluate_slice<P: Point<D>>(&self, xs: &[P], out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
+        if out.len() < xs.len() {
+            return Err(SizeError { needed: xs.len(), given: out.len() });
+        }
+        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
+            let mut block = [[0.0; D]; 8];
+            for (b, p) in block.iter_mut().zip(chunk) {
+                *b = p.coordinates();
+            }
+            self.write8(&block, dst);
+        }
+        Ok(())
+    }
+
+    /// [`Simd::evaluate_slice`] on all cores (rayon), in tiles of [`TILE`]
+    /// points; the results are identical to the serial call's.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_slice_parallel<P: Point<D> + Sync>(
+        &self,
+        xs: &[P],
+        out: &mut [Features32<D, N>],
+    ) -> Result<(), SizeError> {
+        use rayon::prelude::*;
+        if out.len() < xs.len() {
+            return Err(SizeError { needed: xs.len(), given: out.len() });
+        }
+        out[..xs.len()]
+            .par_chunks_mut(TILE)
+            .zip(xs.par_chunks(TILE))
+            .try_for_each(|(dst, src)| self.evaluate_slice(src, dst))
+    }
+
+    /// Every point of a regular grid, into a caller's buffer of exactly
+    /// `grid.len()` results (axis 0 fastest).
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out.len() != grid.len()` (or the grid's size
+    /// overflows); nothing is written.
+    pub fn evaluate_grid(&self, grid: &Grid<D>, out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
+        let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(SizeError { needed, given: out.len() });
+        }
+        self.grid_range(grid, 0, out);
+        Ok(())
+    }
+
+    /// [`Simd::evaluate_grid`] on all cores (rayon), in tiles of [`TILE`]
+    /// points; the results are identical to the serial call's.
+    ///
+    /// # Errors
+    /// As [`Simd::evaluate_grid`].
+    #[cfg(feature = "parallel")]
+    pub fn evaluate_grid_parallel(&self, grid: &Grid<D>, out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
+        use rayon::prelude::*;
+        let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(SizeError { needed, given: out.len() });
+        }
+        out.par_chunks_mut(TILE).enumerate().for_each(|(t, dst)| self.grid_range(grid, t * TILE, dst));
+        Ok(())
+    }
+
+    /// Grid points `first..first + out.len()`.
+    fn grid_range(&self, grid: &Grid<D>, first: usize, out: &mut [Features32<D, N>]) {
+        for (c, dst) in out.chunks_mut(8).enumerate() {
+            let start = first + c * 8;
+            let mut block = [[0.0; D]; 8];
+            for (i, b) in block.iter_mut().enumerate().take(dst.len()) {
+                *b = grid.point(start + i);
+            }
+            self.write8(&block, dst);
+        }
+    }
+
+    /// Eight samples into up to eight results.
+    #[inline]
+    fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
+        let r = self.evaluate8(block);
+        let distance = r.distance.map(|v| v.to_array());
+        let id = r.id.map(|v| v.to_array());
+        let delta = r.delta.map(|d| d.map(|v| v.to_array()));
+        for (i, o) in dst.iter_mut().enumerate() {
+            o.distance = std::array::from_fn(|k| distance[k][i]);
+            o.id = std::array::from_fn(|k| id[k][i]);
+            o.delta = std::array::from_fn(|k| std::array::from_fn(|a| delta[k][a][i]));
+        }
+    }
+
+    /// One sample given as a cell of the pattern (see
+    /// [`Pattern::locate`](crate::Pattern::locate)) and the fraction within
+    /// it: the large-world entry point. The distances are within the
+    /// kernel's bound 4ε_f32(F + 1/S) of
+    /// [`Reference::evaluate_in_cell`](crate::Reference::evaluate_in_cell)
+    /// on the same cell and fraction, however far the cell is from the
+    /// origin, because nothing is computed relative to the origin.
+    ///
+    /// A fraction outside [0, 1] (or not finite) or a cell beyond
+    /// ±[`MAX_CELL_COORD`] gives the invalid result (NaN distances,
+    /// [`INVALID_ID`](crate::INVALID_ID)), as in the reference.
+    pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f32; D]) -> Features32<D, N> {
+        let located = in_cell::<One, D>(&[cell], &[fraction]);
+        let best = self.dispatch::<One>(&located);
+        Features32 { distance: best.rank, delta: best.delta, id: best.id }
+    }
+
+    /// Eight samples given as cells and fractions ([`Simd::evaluate_in_cell`]).
+    pub fn evaluate8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8]) -> super::Features8<D, N> {
+        let located = in_cell::<Eight, D>(cells, fractions);
+        let best = self.dispatch::<Eight>(&located);
+        super::Features8 { distance: best.rank, delta: best.delta, id: best.id }
+    }
+}
+
+/// Lanes located by cell and fraction; invalid lanes get cell 0.
+fn in_cell<L: Lanes, const D: usize>(cells: &[[i64; D]], fractions: &[[f32; D]]) -> Located<L, D> {
+    let limit = MAX_CELL_COORD as i64;
+    let mut cell = [[0i64; 8]; D];
+    let mut f = [[0f32; 8]; D];
+    let mut valid = [false; 8];
+    for i in 0..L::N {
+        let ok = fractions[i].iter().all(|v| (0.0..=1.0).contains(v)) && cells[i].iter().all(|c| c.abs() <= limit);
+        valid[i] = ok;
+        if ok {
+            for a in 0..D {
+                cell[a][i] = cells[i][a];
+                f[a][i] = fractions[i][a] * UNIT;
+            }
+        }
+    }
+    Located {
+        terms: std::array::from_fn(|a| std::array::from_fn(|o| super::terms::<L>(&cell[a], o as i64 - 1))),
+        f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
+        cell: Some(cell),
+        valid,
+    }
+}
