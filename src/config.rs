@@ -106,6 +106,31 @@ impl Metric {
     }
 }
 
+/// Parses `euclidean`, `manhattan`, `chebyshev` or `minkowski:P` (P ≥ 1,
+/// finite), the spelling of the command line; anything else is an error
+/// message saying what is accepted.
+impl std::str::FromStr for Metric {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let metric = match s {
+            "euclidean" => Metric::Euclidean,
+            "manhattan" => Metric::Manhattan,
+            "chebyshev" => Metric::Chebyshev,
+            _ => match s.strip_prefix("minkowski:").map(str::parse::<f64>) {
+                Some(Ok(p)) => Metric::Minkowski(p),
+                _ => {
+                    return Err(format!(
+                        "unknown metric '{s}': use euclidean, manhattan, chebyshev or minkowski:P (P >= 1)"
+                    ))
+                }
+            },
+        };
+        metric.validate().map_err(|e| e.to_string())?;
+        Ok(metric)
+    }
+}
+
 impl fmt::Display for Metric {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.name())

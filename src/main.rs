@@ -84,21 +84,7 @@ struct CheckArgs {
 }
 
 fn parse_metric(s: &str) -> Result<Metric, String> {
-    let metric = match s {
-        "euclidean" => Metric::Euclidean,
-        "manhattan" => Metric::Manhattan,
-        "chebyshev" => Metric::Chebyshev,
-        _ => match s.strip_prefix("minkowski:").map(str::parse::<f64>) {
-            Some(Ok(p)) => Metric::Minkowski(p),
-            _ => {
-                return Err(format!(
-                    "unknown metric '{s}': use euclidean, manhattan, chebyshev or minkowski:P (P >= 1)"
-                ))
-            }
-        },
-    };
-    metric.validate().map_err(|e| e.to_string())?;
-    Ok(metric)
+    s.parse()
 }
 
 fn main() -> ExitCode {
@@ -181,13 +167,14 @@ fn run_reference<const D: usize>(config: Config, campaign: &Campaign) -> Result<
 }
 
 /// The main job: for 2D, 3D and 4D, the reference's speed for F1, F2 and F4,
-/// the exact and window searches against the oracle for orders 1..8, and the
+/// the reference and the SIMD kernel side by side (speed and error), the
+/// exact and window searches against the oracle for orders 1..8, and the
 /// statistics of F1. Prints three tables; the full reports go to
 /// `out/harness.json`.
 fn main_job() -> Result<(), String> {
     let started = std::time::Instant::now();
     let mut reports = Vec::new();
-    println!("worley main job: the f64 reference kernel, default configuration");
+    println!("worley main job: the f64 reference and the 8-lane SIMD kernel, default configuration");
     println!("(seed 0, λ {}, Euclidean); speed on one thread, checks on all cores\n", worley::config::DEFAULT_DENSITY);
     let speed = Campaign { samples: 300_000, oracle_samples: 0, pairs: 0, grid_cells: 0, ..Campaign::default() };
     let accuracy =
@@ -205,6 +192,50 @@ fn main_job() -> Result<(), String> {
             reports.push(r);
         }
         println!();
+    }
+
+    // Reference and SIMD side by side: speed next to error, per order.
+    let versus =
+        Campaign { samples: 300_000, oracle_samples: 50_000, pairs: 50_000, grid_cells: 0, ..Campaign::default() };
+    println!(
+        "\nspeed against error: reference (f64) vs SIMD (8 lanes, f32, {}), exact mode, one thread;",
+        worley::simd_level()
+    );
+    println!(
+        "error against brute force over {} samples, continuity over {} straddling pairs",
+        versus.oracle_samples, versus.pairs
+    );
+    println!(
+        "{:>4} {:>5} | {:>9} {:>9} {:>6} | {:>10} {:>10} {:>6} {:>6}",
+        "dim", "order", "ref M/s", "SIMD M/s", "ratio", "ref maxerr", "SIMD maxerr", "wrong", "disc"
+    );
+    for dim in 2..=4 {
+        for order in [1, 2, 4] {
+            let config = Config { order, ..Config::default() };
+            let r = dispatch(dim, config, &versus)?;
+            let v = match dim {
+                2 => run_simd::<2>(config, &versus)?,
+                3 => run_simd::<3>(config, &versus)?,
+                _ => run_simd::<4>(config, &versus)?,
+            };
+            let max_err = |rep: &Report| rep.orders.iter().map(|o| o.max_error).fold(0.0, f64::max);
+            let wrong: u64 = v.orders.iter().map(|o| o.oracle_disagreements + o.id_disagreements).sum();
+            let disc: u64 = v.orders.iter().map(|o| o.continuity_violations).sum();
+            println!(
+                "{:>4} {:>5} | {:>9.3} {:>9.3} {:>6.2} | {:>10.2e} {:>10.2e} {:>6} {:>6}",
+                format!("{dim}D"),
+                format!("F1-F{order}"),
+                r.throughput / 1e6,
+                v.throughput / 1e6,
+                v.throughput / r.throughput,
+                max_err(&r),
+                max_err(&v),
+                wrong,
+                disc
+            );
+            reports.push(r);
+            reports.push(v);
+        }
     }
 
     let mut exact = Vec::new();

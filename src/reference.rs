@@ -128,8 +128,8 @@ impl<const D: usize> Reference<D> {
     pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f64; D]) -> Features<D> {
         let order = self.config.order;
         let metric = self.config.metric;
-        let limit = MAX_CELL_COORD as i64;
-        if !(fraction.iter().all(|f| (0.0..=1.0).contains(f)) && cell.iter().all(|c| c.abs() <= limit)) {
+        let limit = MAX_CELL_COORD as u64;
+        if !(fraction.iter().all(|f| (0.0..=1.0).contains(f)) && cell.iter().all(|c| c.unsigned_abs() <= limit)) {
             return Features::invalid(order);
         }
         let f = fraction;

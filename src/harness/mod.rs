@@ -22,6 +22,7 @@
 //! reproducible from the campaign's seed, and the parallel parts give the
 //! same counts on any number of threads.
 
+pub mod fuzz;
 pub mod oracle;
 pub mod report;
 
@@ -89,14 +90,15 @@ impl<const D: usize, const N: usize> Kernel<D> for crate::simd::Simd<D, N> {
     fn evaluate(&self, x: [f64; D]) -> Features<D> {
         widen_features(&crate::simd::Simd::evaluate(self, x))
     }
-    /// The 8-lane instantiation, eight samples per call.
+    /// The 8-lane instantiation through the slice API.
     fn evaluate_batch(&self, xs: &[[f64; D]], out: &mut [Features<D>]) {
-        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
-            let mut block = [[0.0; D]; 8];
-            block[..chunk.len()].copy_from_slice(chunk);
-            let r = self.evaluate8(&block);
-            for (i, o) in dst.iter_mut().take(chunk.len()).enumerate() {
-                *o = widen_features(&crate::simd::lane(&r, i));
+        let mut lanes = [crate::simd::Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 64];
+        for (chunk, dst) in xs.chunks(64).zip(out.chunks_mut(64)) {
+            // `out` is at least as long as `xs` (the trait's contract).
+            if self.evaluate_slice(chunk, &mut lanes).is_ok() {
+                for (o, r) in dst.iter_mut().zip(&lanes) {
+                    *o = widen_features(r);
+                }
             }
         }
     }

@@ -220,12 +220,13 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 
 /// Lanes located by cell and fraction; invalid lanes get cell 0.
 fn in_cell<L: Lanes, const D: usize>(cells: &[[i64; D]], fractions: &[[f32; D]]) -> Located<L, D> {
-    let limit = MAX_CELL_COORD as i64;
+    let limit = MAX_CELL_COORD as u64;
     let mut cell = [[0i64; 8]; D];
     let mut f = [[0f32; 8]; D];
     let mut valid = [false; 8];
     for i in 0..L::N {
-        let ok = fractions[i].iter().all(|v| (0.0..=1.0).contains(v)) && cells[i].iter().all(|c| c.abs() <= limit);
+        let ok =
+            fractions[i].iter().all(|v| (0.0..=1.0).contains(v)) && cells[i].iter().all(|c| c.unsigned_abs() <= limit);
         valid[i] = ok;
         if ok {
             for a in 0..D {

@@ -1,0 +1,69 @@
+//! The fuzz targets' checks on stable: every input kept under
+//! `fuzz/regressions/`, both the named files in `<target>/` (inputs that once
+//! failed) and `<target>.hex`, the fuzzers' minimised corpus, one input per
+//! line in hex; then a few thousand seeded random byte strings.
+
+use std::path::Path;
+use worley::harness::fuzz;
+
+type Check = fn(&[u8]);
+
+const TARGETS: [(&str, Check); 4] = [
+    ("differential", fuzz::differential),
+    ("continuity", fuzz::continuity),
+    ("bad_input", fuzz::bad_input),
+    ("config", fuzz::config),
+];
+
+#[test]
+fn kept_fuzz_inputs_replay_cleanly() {
+    let mut replayed = 0;
+    for (target, check) in TARGETS {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions").join(target);
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for entry in entries {
+            let path = entry.unwrap().path();
+            if path.is_file() && path.extension().is_none_or(|e| e != "md") {
+                let data = std::fs::read(&path).unwrap();
+                if std::panic::catch_unwind(|| check(&data)).is_err() {
+                    panic!("{target}: {} fails", path.display());
+                }
+                replayed += 1;
+            }
+        }
+        let hex = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("fuzz/regressions/{target}.hex"));
+        let Ok(text) = std::fs::read_to_string(&hex) else { continue };
+        for (line, input) in text.lines().enumerate() {
+            let data: Vec<u8> = (0..input.len() / 2)
+                .map(|i| u8::from_str_radix(&input[2 * i..2 * i + 2], 16).expect("hex digits"))
+                .collect();
+            if std::panic::catch_unwind(|| check(&data)).is_err() {
+                panic!("{target}: line {} of {} fails", line + 1, hex.display());
+            }
+            replayed += 1;
+        }
+    }
+    assert!(replayed > 0, "no kept fuzz inputs found under fuzz/regressions");
+    println!("replayed {replayed} kept inputs");
+}
+
+#[test]
+fn seeded_random_inputs_pass_every_check() {
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    for (target, check) in TARGETS {
+        for case in 0..3000 {
+            let len = (next() % 160) as usize;
+            let data: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+            if std::panic::catch_unwind(|| check(&data)).is_err() {
+                panic!("{target}: seeded case {case} fails: {data:?}");
+            }
+        }
+    }
+}
