@@ -169,7 +169,7 @@ fn run_reference<const D: usize>(config: Config, campaign: &Campaign) -> Result<
 /// The main job: for 2D, 3D and 4D, the reference's speed for F1, F2 and F4,
 /// the reference and the SIMD kernel side by side (speed and error), the
 /// exact and window searches against the oracle for orders 1..8, and the
-/// statistics of F1. Prints three tables; the full reports go to
+/// statistics of F1. Prints four tables; the full reports go to
 /// `out/harness.json`.
 fn main_job() -> Result<(), String> {
     let started = std::time::Instant::now();

@@ -1,4 +1,5 @@
-//! Named hard cases, each with its reason, through the reference kernel in
+//! Named hard cases, each with its reason, through the reference kernel (and,
+//! at the end, each of the 8 lanes of the SIMD kernel) in
 //! 2D, 3D and 4D, each value placed on every axis in turn. Every result is
 //! compared with the brute-force oracle, and with the result one ulp away
 //! for continuity.
@@ -207,4 +208,47 @@ fn window_mode_reports_missing_points_as_infinite() {
         }
     }
     assert!(missing > 100, "{missing}");
+}
+
+/// Every named case through the 8-lane kernel: the value on each axis, in
+/// each of the 8 lanes in turn (the other lanes ordinary), in 2D, 3D and 4D.
+/// The lane must match the single-point call bit for bit and the oracle
+/// within the kernel's stated bound 4ε_f32(F + 1/S), with the oracle's IDs.
+fn simd_lanes<const D: usize>() {
+    use worley::simd::lane;
+    use worley::{Outputs, Simd};
+    let config = Config { order: 3, ..Config::default() };
+    let kernel = Simd::<D, 3>::new(config, Outputs::Ids).unwrap();
+    let s = kernel.pattern().scale();
+    for case in CASES {
+        let v = (case.value)(s);
+        for axis in 0..D {
+            for slot in 0..8 {
+                let mut points: [[f64; D]; 8] =
+                    std::array::from_fn(|i| std::array::from_fn(|a| 0.37 + a as f64 * 1.3 + i as f64 * 0.71));
+                points[slot][axis] = v;
+                let got = lane(&kernel.evaluate8(&points), slot);
+                let single = kernel.evaluate(points[slot]);
+                let ctx = format!("{} ({}) on axis {axis} of {D}D in lane {slot}", case.name, case.reason);
+                assert_eq!(got.distance.map(f32::to_bits), single.distance.map(f32::to_bits), "{ctx}");
+                assert_eq!(got.id, single.id, "{ctx}");
+                let want = brute_force(kernel.pattern(), Metric::Euclidean, 4, points[slot], &mut Vec::new());
+                for k in 0..3 {
+                    let tol = 4.0 * f32::EPSILON as f64 * (want.distance[k] + 1.0 / s);
+                    let err = (got.distance[k] as f64 - want.distance[k]).abs();
+                    assert!(err <= tol, "{ctx}: F{} off by {err}", k + 1);
+                    let tied = (k > 0 && want.distance[k] - want.distance[k - 1] <= 2.0 * tol)
+                        || want.distance[k + 1] - want.distance[k] <= 2.0 * tol;
+                    assert!(tied || got.id[k] == want.id[k], "{ctx}: F{} ID", k + 1);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn every_hard_case_in_every_lane_of_the_simd_kernel() {
+    simd_lanes::<2>();
+    simd_lanes::<3>();
+    simd_lanes::<4>();
 }
