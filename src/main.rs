@@ -202,9 +202,10 @@ fn main_job() -> Result<(), String> {
         worley::simd_level()
     );
     println!(
-        "error against brute force over {} samples, continuity over {} straddling pairs",
+        "error against brute force over {} samples, continuity over {} straddling pairs;",
         versus.oracle_samples, versus.pairs
     );
+    println!("speed through the harness, which converts every result to its f64 report (see `cargo bench` for the kernels alone)");
     println!(
         "{:>4} {:>5} | {:>9} {:>9} {:>6} | {:>10} {:>10} {:>6} {:>6}",
         "dim", "order", "ref M/s", "SIMD M/s", "ratio", "ref maxerr", "SIMD maxerr", "wrong", "disc"

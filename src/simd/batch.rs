@@ -235,10 +235,5 @@ fn in_cell<L: Lanes, const D: usize>(cells: &[[i64; D]], fractions: &[[f32; D]])
             }
         }
     }
-    Located {
-        terms: std::array::from_fn(|a| std::array::from_fn(|o| super::terms::<L>(&cell[a], o as i64 - 1))),
-        f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
-        cell: Some(cell),
-        valid,
-    }
+    Located::lanewise(cell, &f, valid)
 }

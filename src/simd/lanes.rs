@@ -74,8 +74,6 @@ pub trait Lanes: Copy + 'static {
     fn u_shr8(a: Self::U) -> Self::U;
     /// a >> 24
     fn u_shr24(a: Self::U) -> Self::U;
-    /// The largest lane (lanes are not NaN).
-    fn hmax(a: Self::F) -> f32;
     /// a as f32 for a < 2^24 (exact)
     fn u24_to_f(a: Self::U) -> Self::F;
 }
@@ -211,10 +209,6 @@ impl Lanes for One {
         a >> 24
     }
     #[inline(always)]
-    fn hmax(a: f32) -> f32 {
-        a
-    }
-    #[inline(always)]
     fn u24_to_f(a: u32) -> f32 {
         a as i32 as f32
     }
@@ -330,10 +324,6 @@ impl Lanes for Eight {
     #[inline(always)]
     fn u_shr24(a: u32x8) -> u32x8 {
         a >> 24_u32
-    }
-    #[inline(always)]
-    fn hmax(a: f32x8) -> f32 {
-        a.to_array().into_iter().fold(f32::NEG_INFINITY, f32::max)
     }
     #[inline(always)]
     fn u24_to_f(a: u32x8) -> f32x8 {

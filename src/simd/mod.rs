@@ -147,6 +147,19 @@ struct Located<L: Lanes, const D: usize> {
     valid: [bool; 8],
 }
 
+impl<L: Lanes, const D: usize> Located<L, D> {
+    /// Lanes from per-lane i64 cells and fractions (already in units of
+    /// [`UNIT`]): the full axis terms of every neighbour, kept cells.
+    fn lanewise(cell: [[i64; 8]; D], f: &[[f32; 8]; D], valid: [bool; 8]) -> Self {
+        Located {
+            terms: std::array::from_fn(|a| std::array::from_fn(|o| terms::<L>(&cell[a], o as i64 - 1))),
+            f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
+            cell: Some(cell),
+            valid,
+        }
+    }
+}
+
 /// The n best candidates per lane.
 struct Best<L: Lanes, const D: usize, const N: usize> {
     rank: [L::F; N],
@@ -304,12 +317,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 }
             }
         }
-        Located {
-            terms: std::array::from_fn(|a| std::array::from_fn(|o| terms::<L>(&cell[a], o as i64 - 1))),
-            f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
-            cell: Some(cell),
-            valid,
-        }
+        Located::lanewise(cell, &f, valid)
     }
 
     /// Picks the monomorphised kernel for the metric and outputs, then
