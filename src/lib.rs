@@ -37,10 +37,12 @@ pub mod config;
 pub mod definition;
 pub mod harness;
 pub mod math;
+pub mod perlin;
 pub mod reference;
 pub mod simd;
+pub mod texture;
 
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Features, Reference};
-pub use simd::{simd_level, Features32, Features8, Grid, Outputs, Point, Simd, SizeError};
+pub use simd::{simd_level, Features32, Features8, Grid, Outputs, Period, PeriodError, Point, Simd, SizeError};

@@ -55,8 +55,10 @@
 
 pub mod batch;
 pub mod lanes;
+pub mod periodic;
 
 pub use batch::{Grid, Point, SizeError, TILE};
+pub use periodic::{Period, PeriodError, MAX_PERIOD};
 
 use wide::{f32x8, u32x8};
 
@@ -145,17 +147,28 @@ struct Located<L: Lanes, const D: usize> {
     cell: Option<[[i64; 8]; D]>,
     /// Lanes with a valid input.
     valid: [bool; 8],
+    /// Cells per axis after which the pattern repeats (periodic variant):
+    /// every cell is wrapped into [0, period) before it is hashed.
+    period: Option<[i64; D]>,
 }
 
 impl<L: Lanes, const D: usize> Located<L, D> {
     /// Lanes from per-lane i64 cells and fractions (already in units of
     /// [`UNIT`]): the full axis terms of every neighbour, kept cells.
     fn lanewise(cell: [[i64; 8]; D], f: &[[f32; 8]; D], valid: [bool; 8]) -> Self {
+        Self::wrapped(cell, f, valid, None)
+    }
+
+    /// As [`Located::lanewise`], with the cells wrapped by `period`.
+    fn wrapped(cell: [[i64; 8]; D], f: &[[f32; 8]; D], valid: [bool; 8], period: Option<[i64; D]>) -> Self {
         Located {
-            terms: std::array::from_fn(|a| std::array::from_fn(|o| terms::<L>(&cell[a], o as i64 - 1))),
+            terms: std::array::from_fn(|a| {
+                std::array::from_fn(|o| terms::<L>(&cell[a], o as i64 - 1, period.map(|p| p[a])))
+            }),
             f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
             cell: Some(cell),
             valid,
+            period,
         }
     }
 }
@@ -299,6 +312,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
             cell: None,
             valid: [true; 8],
+            period: None,
         }
     }
 
@@ -452,7 +466,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         });
         for r in 2..=MAX_SHELLS {
             for offset in shell::<D>(r) {
-                let t: [L::U; D] = std::array::from_fn(|a| terms::<L>(&cell[a], offset[a]));
+                let t: [L::U; D] = std::array::from_fn(|a| terms::<L>(&cell[a], offset[a], at.period.map(|p| p[a])));
                 let gaps: [L::F; D] = std::array::from_fn(|a| {
                     let o = offset[a];
                     if o > 0 {
@@ -566,12 +580,17 @@ fn logical_block<const D: usize>() -> Vec<[i64; D]> {
     block
 }
 
-/// Per-lane axis terms of the cells at `offset` from `cell`.
+/// Per-lane axis terms of the cells at `offset` from `cell`, wrapped into
+/// [0, period) when the pattern is periodic.
 #[inline(always)]
-fn terms<L: Lanes>(cell: &[i64; 8], offset: i64) -> L::U {
+fn terms<L: Lanes>(cell: &[i64; 8], offset: i64, period: Option<i64>) -> L::U {
     let mut t = [0u32; 8];
     for (ti, c) in t.iter_mut().zip(cell).take(L::N) {
-        *ti = axis_term(c.wrapping_add(offset));
+        let c = c.wrapping_add(offset);
+        *ti = axis_term(match period {
+            Some(p) => c.rem_euclid(p),
+            None => c,
+        });
     }
     L::u_load(&t[..L::N])
 }

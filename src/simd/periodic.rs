@@ -1,0 +1,110 @@
+//! The periodic (tileable) variant of the SIMD kernel.
+//!
+//! A periodic pattern repeats every `period[a]` cells along axis `a`: the
+//! feature points of cell `c` are those of cell `c mod period` of the
+//! ordinary pattern, shifted back by whole periods. Feature IDs come from
+//! the wrapped cell's hash, so a point keeps its ID across the wrap. The
+//! search is the ordinary certified search over this periodic point set,
+//! so the result is exact in the same sense as everywhere else.
+//!
+//! Periodic samples are addressed in **cells** (lattice units), not in user
+//! units: a period of `P` cells is then the whole number `P` in the input,
+//! and a coordinate is reduced with `x mod P`, which is exact in f64. Hence
+//! `F(x + k·P)` is bit-identical to `F(x)` whenever `x + k·P` is itself
+//! exact. Distances and deltas are in user units, as in the rest of the
+//! crate (mean F1 = 1); multiply a user coordinate by
+//! [`Pattern::scale`](crate::Pattern::scale) to get cells.
+
+use super::{Features32, Features8, Located, Simd, UNIT};
+use crate::simd::lanes::{Eight, Lanes, One};
+
+/// The largest period per axis, in cells (2^24: a reduced coordinate keeps
+/// at least 29 fraction bits in f64).
+pub const MAX_PERIOD: u32 = 1 << 24;
+
+/// A validated period: whole cells per axis, 1 to [`MAX_PERIOD`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Period<const D: usize>([u32; D]);
+
+/// A period that cannot be used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PeriodError {
+    /// The axis whose period is out of range.
+    pub axis: usize,
+    /// The period given.
+    pub given: u64,
+}
+
+impl std::fmt::Display for PeriodError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "period {} on axis {} is invalid: use whole cells from 1 to {}", self.given, self.axis, MAX_PERIOD)
+    }
+}
+
+impl std::error::Error for PeriodError {}
+
+impl<const D: usize> Period<D> {
+    /// Cells per axis.
+    ///
+    /// # Errors
+    /// [`PeriodError`] for a period of 0 or above [`MAX_PERIOD`].
+    pub fn new(cells: [u32; D]) -> Result<Self, PeriodError> {
+        match cells.iter().position(|&p| p == 0 || p > MAX_PERIOD) {
+            Some(axis) => Err(PeriodError { axis, given: u64::from(cells[axis]) }),
+            None => Ok(Period(cells)),
+        }
+    }
+
+    /// Cells per axis.
+    pub fn cells(&self) -> [u32; D] {
+        self.0
+    }
+
+    /// This period times `k` per axis (the period of an octave of integer
+    /// lacunarity `k`), or `None` past [`MAX_PERIOD`].
+    pub fn times(&self, k: u32) -> Option<Self> {
+        let cells: Option<Vec<u32>> = self.0.iter().map(|p| p.checked_mul(k).filter(|&v| v <= MAX_PERIOD)).collect();
+        cells.map(|c| Period(std::array::from_fn(|a| c[a])))
+    }
+}
+
+impl<const D: usize, const N: usize> Simd<D, N> {
+    /// One sample of the periodic pattern, `x` in cells. A non-finite
+    /// coordinate gives the invalid result (NaN distances,
+    /// [`INVALID_ID`](crate::INVALID_ID)).
+    pub fn evaluate_periodic(&self, x: [f64; D], period: &Period<D>) -> Features32<D, N> {
+        let located = wrap::<One, D>(&[x], period);
+        let best = self.dispatch::<One>(&located);
+        Features32 { distance: best.rank, delta: best.delta, id: best.id }
+    }
+
+    /// Eight samples of the periodic pattern, `x` in cells; lane `i` is
+    /// bit-identical to [`Simd::evaluate_periodic`] of `x[i]`.
+    pub fn evaluate8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>) -> Features8<D, N> {
+        let located = wrap::<Eight, D>(x, period);
+        let best = self.dispatch::<Eight>(&located);
+        Features8 { distance: best.rank, delta: best.delta, id: best.id }
+    }
+}
+
+/// Lanes reduced into the period: r = x mod P (exact), the cell ⌊r⌋ and the
+/// fraction r − ⌊r⌋ (exact), the cell wrapped once more in case the
+/// remainder of a tiny negative x rounded up to P.
+fn wrap<L: Lanes, const D: usize>(xs: &[[f64; D]], period: &Period<D>) -> Located<L, D> {
+    let p = period.0.map(i64::from);
+    let mut cell = [[0i64; 8]; D];
+    let mut f = [[0f32; 8]; D];
+    let mut valid = [false; 8];
+    for (i, x) in xs.iter().enumerate().take(L::N) {
+        if x.iter().all(|v| v.is_finite()) {
+            valid[i] = true;
+            for a in 0..D {
+                let r = x[a].rem_euclid(p[a] as f64);
+                let floor = r.floor();
+                cell[a][i] = (floor as i64).rem_euclid(p[a]);
+                f[a][i] = (r - floor) as f32 * UNIT;
+            }
+        }
+    }
+    Located::wrapped(cell, &f, valid, Some(p))
+}

@@ -1,0 +1,314 @@
+//! Textures on the basis: the periodic variant against brute force over
+//! periodic images, bit-identity across the wrap, combinations and fractal
+//! sums against their definitions, analytic gradients against finite
+//! differences, and rejected parameters.
+
+use worley::definition::FRACTION_ULP;
+use worley::harness::uniform;
+use worley::texture::{bump, Combination, Fractal, Texture, TextureError};
+use worley::{Config, Metric, Outputs, Period, Simd};
+
+/// Brute force over the periodic point set: every point of every cell of
+/// one period, repeated at shifts −2..=2 periods per axis (enough for the
+/// periods used here: at least 3 cells, and F4 is within 2 cells). Sorted
+/// (distance in user units, id) pairs of the sample `x` given in cells.
+fn periodic_brute_force<const D: usize>(
+    kernel: &Simd<D, 4>,
+    period: [u32; D],
+    x: [f64; D],
+    metric: Metric,
+) -> Vec<(f64, u32)> {
+    let pattern = kernel.pattern();
+    let s = pattern.scale();
+    let r: [f64; D] = std::array::from_fn(|a| x[a].rem_euclid(period[a] as f64));
+    let mut found = Vec::new();
+    let cells: usize = period.iter().map(|&p| p as usize).product();
+    for index in 0..cells {
+        let mut rest = index;
+        let cell: [i64; D] = std::array::from_fn(|a| {
+            let c = rest % period[a] as usize;
+            rest /= period[a] as usize;
+            c as i64
+        });
+        for point in pattern.points(cell) {
+            for shift in 0..5usize.pow(D as u32) {
+                let mut rest = shift;
+                let delta: Vec<f64> = (0..D)
+                    .map(|a| {
+                        let k = (rest % 5) as f64 - 2.0;
+                        rest /= 5;
+                        let at = cell[a] as f64 + k * period[a] as f64 + point.fraction[a] as f64 * FRACTION_ULP;
+                        (r[a] - at) / s
+                    })
+                    .collect();
+                found.push((metric.distance(&delta), point.id));
+            }
+        }
+    }
+    found.sort_by(|a, b| a.0.total_cmp(&b.0));
+    found.truncate(5);
+    found
+}
+
+fn periodic_against_brute_force<const D: usize>(period: [u32; D], metric: Metric) {
+    let config = Config { order: 4, metric, seed: 9, ..Config::default() };
+    let kernel = Simd::<D, 4>::new(config, Outputs::Ids).unwrap();
+    let p = Period::new(period).unwrap();
+    let bound = |f: f64| 4.0 * f32::EPSILON as f64 * (f + 1.0 / kernel.pattern().scale());
+    for i in 0..400 {
+        let x: [f64; D] = std::array::from_fn(|a| (uniform(5, (i * D + a) as u64) - 0.5) * 40.0 * period[a] as f64);
+        let got = kernel.evaluate_periodic(x, &p);
+        let want = periodic_brute_force(&kernel, period, x, metric);
+        for k in 0..4 {
+            let err = (got.distance[k] as f64 - want[k].0).abs();
+            assert!(
+                err <= bound(want[k].0),
+                "{D}D {metric:?} x {x:?} F{}: {} vs {}",
+                k + 1,
+                got.distance[k],
+                want[k].0
+            );
+            // IDs agree unless F_k ties its neighbour within the bound.
+            let tie = (k > 0 && want[k].0 - want[k - 1].0 <= 2.0 * bound(want[k].0))
+                || want[k + 1].0 - want[k].0 <= 2.0 * bound(want[k].0);
+            assert!(tie || got.id[k] == want[k].1, "{D}D x {x:?} F{} id", k + 1);
+        }
+    }
+}
+
+#[test]
+fn periodic_kernel_agrees_with_brute_force_over_periodic_images() {
+    periodic_against_brute_force::<2>([3, 5], Metric::Euclidean);
+    periodic_against_brute_force::<2>([4, 3], Metric::Manhattan);
+    periodic_against_brute_force::<3>([3, 4, 3], Metric::Euclidean);
+    periodic_against_brute_force::<3>([3, 3, 5], Metric::Chebyshev);
+    periodic_against_brute_force::<4>([3, 3, 3, 4], Metric::Euclidean);
+}
+
+#[test]
+fn periodic_results_are_bit_identical_across_the_wrap() {
+    fn go<const D: usize>(period: [u32; D]) {
+        let kernel = Simd::<D, 4>::new(Config { order: 4, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+        let p = Period::new(period).unwrap();
+        for i in 0..2000 {
+            // Dyadic points, so that x + k·P is exact.
+            let x: [f64; D] = std::array::from_fn(|a| {
+                ((uniform(7, (i * D + a) as u64) * period[a] as f64) * 1024.0).floor() / 1024.0
+            });
+            let base = kernel.evaluate_periodic(x, &p);
+            let k = (i % 7) as f64 - 3.0;
+            let moved: [f64; D] = std::array::from_fn(|a| x[a] + k * period[a] as f64 * ((a + 1) as f64));
+            let lanes = kernel.evaluate8_periodic(&[moved; 8], &p);
+            let other = worley::simd::lane(&lanes, i % 8);
+            assert_eq!(base.distance.map(f32::to_bits), other.distance.map(f32::to_bits), "{x:?} vs {moved:?}");
+            assert_eq!(base.id, other.id);
+            assert_eq!(base.delta.map(|d| d.map(f32::to_bits)), other.delta.map(|d| d.map(f32::to_bits)));
+        }
+        // Non-finite coordinates give the invalid result.
+        let mut bad = [0.5; D];
+        bad[D - 1] = f64::NAN;
+        assert!(kernel.evaluate_periodic(bad, &p).distance.iter().all(|v| v.is_nan()));
+    }
+    go::<2>([7, 1]);
+    go::<3>([5, 6, 2]);
+    go::<4>([3, 4, 5, 6]);
+}
+
+#[test]
+fn a_periodic_fractal_tiles_with_integer_lacunarity() {
+    let p = Period::new([4, 6, 5]).unwrap();
+    for lacunarity in [2.0, 3.0] {
+        let t = Texture::<3, 2>::new(
+            Config::default(),
+            Combination::crackle(),
+            Fractal { octaves: 4, lacunarity, gain: 0.5 },
+            Some(p),
+        )
+        .unwrap();
+        for i in 0..500 {
+            let x: [f64; 3] = std::array::from_fn(|a| (uniform(3, (i * 3 + a) as u64) * 20.0 * 64.0).floor() / 64.0);
+            let y = [x[0] + 4.0, x[1] - 12.0, x[2] + 50.0];
+            assert_eq!(t.value(x).to_bits(), t.value(y).to_bits(), "lacunarity {lacunarity}: {x:?}");
+        }
+    }
+    // A fractional lacunarity cannot tile.
+    let e = Texture::<3, 1>::new(
+        Config::default(),
+        Combination::f(1),
+        Fractal { octaves: 3, lacunarity: 2.5, gain: 0.5 },
+        Some(p),
+    );
+    assert!(matches!(e, Err(TextureError::Lacunarity(_))));
+}
+
+#[test]
+fn combinations_and_fractal_sums_follow_their_definitions() {
+    let config = Config { order: 4, ..Config::default() };
+    let kernel = Simd::<3, 4>::new(config, Outputs::Distances).unwrap();
+    type Formula = fn(&[f64; 4]) -> f64;
+    let combos: [(Combination, Formula); 4] = [
+        (Combination::Linear(vec![0.5, -1.0, 0.25, 2.0]), |f| 0.5 * f[0] - f[1] + 0.25 * f[2] + 2.0 * f[3]),
+        (Combination::crackle(), |f| f[1] - f[0]),
+        (Combination::Product, |f| f[0] * f[1]),
+        (Combination::SquareDifference, |f| f[2] * f[2] - f[1] * f[1]),
+    ];
+    for (combo, formula) in combos {
+        let fractal = Fractal { octaves: 3, lacunarity: 2.0, gain: 0.5 };
+        let t = Texture::<3, 4>::new(config, combo.clone(), fractal, None).unwrap();
+        for i in 0..300 {
+            let x: [f64; 3] = std::array::from_fn(|a| (uniform(11, (i * 3 + a) as u64) - 0.5) * 200.0);
+            let mut want = 0.0;
+            for o in 0..3 {
+                let scale = 2f64.powi(o);
+                let f = kernel.evaluate(x.map(|v| v * scale)).distance.map(f64::from);
+                want += formula(&f) / scale;
+            }
+            let got = t.value(x) as f64;
+            assert!((got - want).abs() <= 1e-5 * (1.0 + want.abs()), "{}: {got} vs {want}", combo.name());
+        }
+    }
+}
+
+/// Central differences of a single-octave texture, where the gradient is
+/// smooth: no feature changes rank within ±h on any axis and the sample is
+/// away from the metric's kinks (Manhattan axis planes, Chebyshev diagonals).
+fn gradients_match_differences<const N: usize>(metric: Metric, combo: Combination, fractal: Fractal) {
+    let config = Config { order: N, metric, ..Config::default() };
+    let t = Texture::<3, N>::new(config, combo.clone(), fractal, None).unwrap();
+    let ids = Simd::<3, N>::new(config, Outputs::IdsAndDeltas).unwrap();
+    let h = 1e-3;
+    let mut tested = 0;
+    for i in 0..600 {
+        let x: [f64; 3] = std::array::from_fn(|a| (uniform(13, (i * 3 + a) as u64) - 0.5) * 100.0);
+        let (sample, grad) = t.gradient(x);
+        // Away from kinks: at every octave, the same features within ±2h.
+        let smooth = (0..fractal.octaves).all(|o| {
+            let freq = (fractal.lacunarity as f64).powi(o as i32);
+            let at = |y: [f64; 3]| ids.evaluate(y.map(|v| v * freq));
+            let centre = at(x);
+            let kink_free = centre.delta.iter().all(|d| {
+                let m: Vec<f32> = d.iter().map(|v| v.abs()).collect();
+                let mut sorted = m.clone();
+                sorted.sort_by(f32::total_cmp);
+                match metric {
+                    Metric::Manhattan => m.iter().all(|&v| v as f64 > 4.0 * h * freq),
+                    Metric::Chebyshev => (sorted[2] - sorted[1]) as f64 > 4.0 * h * freq,
+                    _ => true,
+                }
+            });
+            kink_free
+                && (0..3).all(|a| {
+                    [-2.0 * h, 2.0 * h].iter().all(|&s| {
+                        let mut y = x;
+                        y[a] += s;
+                        at(y).id == centre.id
+                    })
+                })
+        });
+        if !smooth {
+            continue;
+        }
+        tested += 1;
+        assert!(sample.defined, "{metric:?} {}: gradient flagged at a smooth point {x:?}", combo.name());
+        for a in 0..3 {
+            let (mut lo, mut hi) = (x, x);
+            lo[a] -= h;
+            hi[a] += h;
+            let fd = (t.value(hi) as f64 - t.value(lo) as f64) / (2.0 * h);
+            let scale = (fractal.lacunarity as f64).powi(fractal.octaves as i32 - 1);
+            let tol = 2e-3 * (1.0 + grad[a].abs() as f64) * scale + 1e-3 * scale;
+            assert!(
+                (fd - grad[a] as f64).abs() <= tol,
+                "{metric:?} {} axis {a} at {x:?}: analytic {} vs differences {fd}",
+                combo.name(),
+                grad[a]
+            );
+        }
+    }
+    assert!(tested > 200, "{metric:?} {}: only {tested} smooth samples", combo.name());
+}
+
+#[test]
+fn analytic_gradients_match_finite_differences() {
+    let one = Fractal::default();
+    for metric in [Metric::Euclidean, Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
+        gradients_match_differences::<1>(metric, Combination::f(1), one);
+        gradients_match_differences::<2>(metric, Combination::crackle(), one);
+    }
+    gradients_match_differences::<2>(Metric::Euclidean, Combination::Product, one);
+    gradients_match_differences::<3>(Metric::Euclidean, Combination::SquareDifference, one);
+    gradients_match_differences::<4>(Metric::Euclidean, Combination::Linear(vec![0.3, -1.0, 0.5, 1.5]), one);
+    gradients_match_differences::<1>(Metric::Euclidean, Combination::f(1), Fractal::octaves(3));
+    gradients_match_differences::<2>(Metric::Manhattan, Combination::crackle(), Fractal::octaves(2));
+}
+
+#[test]
+fn gradients_are_flagged_where_the_metric_has_none() {
+    // Periodic textures are addressed in cells, so a feature point's
+    // position is exact in the input and the kinks can be hit exactly.
+    let period = Period::new([8, 8]).unwrap();
+    let build = |metric| {
+        let config = Config { metric, ..Config::default() };
+        Texture::<2, 1>::new(config, Combination::f(1), Fractal::default(), Some(period)).unwrap()
+    };
+    let (euclid, manhattan, chebyshev) = (build(Metric::Euclidean), build(Metric::Manhattan), build(Metric::Chebyshev));
+    let point = euclid.kernel().pattern().points([3, 4])[0];
+    let at = [3.0 + point.offset()[0], 4.0 + point.offset()[1]];
+    // On the feature point: F1 = 0, no gradient for any metric.
+    for t in [&euclid, &manhattan, &chebyshev] {
+        let (sample, _) = t.gradient(at);
+        assert_eq!(sample.value, 0.0);
+        assert!(!sample.defined);
+    }
+    // Manhattan: on the axis line through the point, just beside it.
+    let beside = [at[0], at[1] + 1e-3];
+    let (sample, grad) = manhattan.gradient(beside);
+    assert!(sample.value > 0.0 && sample.value < 0.01 && !sample.defined, "{sample:?} {grad:?}");
+    let (sample, _) = euclid.gradient(beside);
+    assert!(sample.defined);
+    // Chebyshev: on the diagonal through the point.
+    let diagonal = [at[0] + 1.0 / 1024.0, at[1] - 1.0 / 1024.0];
+    let (sample, _) = chebyshev.gradient(diagonal);
+    assert!(sample.value > 0.0 && !sample.defined, "{sample:?}");
+    let (sample, _) = chebyshev.gradient([at[0] + 1.0 / 1024.0, at[1] - 1.0 / 2048.0]);
+    assert!(sample.defined);
+    // Bad input: NaN value, no gradient.
+    let (sample, _) = euclid.gradient([f64::NAN, 0.0]);
+    assert!(sample.value.is_nan() && !sample.defined);
+}
+
+#[test]
+fn bump_tilts_the_normal_against_the_gradient() {
+    let n = glam::Vec3::Z;
+    let b = bump(n, glam::Vec3::new(1.0, 0.0, 5.0), 0.5);
+    assert!((b.length() - 1.0).abs() < 1e-6);
+    assert!(b.x < 0.0 && b.y == 0.0 && b.z > 0.0);
+    // The normal component of the gradient does not tilt anything.
+    assert_eq!(bump(n, glam::Vec3::new(0.0, 0.0, 3.0), 1.0), n);
+    assert_eq!(bump(n, glam::Vec3::splat(f32::NAN), 1.0), n);
+}
+
+#[test]
+fn invalid_texture_parameters_are_rejected_with_the_reason() {
+    let c = Config::default();
+    let f = Fractal::default();
+    let cases: Vec<(Result<Texture<3, 2>, TextureError>, &str)> = vec![
+        (Texture::new(c, Combination::Linear(vec![1.0, f32::NAN]), f, None), "coefficient of F2 is NaN"),
+        (Texture::new(c, Combination::Linear(vec![]), f, None), "at least one coefficient"),
+        (Texture::new(c, Combination::SquareDifference, f, None), "use order 3"),
+        (Texture::new(c, Combination::Product, Fractal { octaves: 0, ..f }, None), "0 octaves"),
+        (Texture::new(c, Combination::Product, Fractal { octaves: 40, ..f }, None), "not resolved in f32"),
+        (Texture::new(c, Combination::Product, Fractal { lacunarity: 1.0, ..f }, None), "lacunarity 1"),
+        (Texture::new(c, Combination::Product, Fractal { gain: f32::INFINITY, ..f }, None), "gain inf"),
+        (Texture::new(Config { density: -1.0, ..c }, Combination::Product, f, None), "density -1"),
+    ];
+    for (result, words) in cases {
+        let e = result.expect_err(words).to_string();
+        assert!(e.contains(words), "{e:?} should say {words:?}");
+    }
+    assert!(Period::new([3, 0, 2]).unwrap_err().to_string().contains("period 0 on axis 1"));
+    assert!(Period::<2>::new([1 << 25, 2]).is_err());
+    // A period that overflows after the octaves' lacunarity.
+    let big = Period::new([1 << 23, 1, 1]).unwrap();
+    assert!(Texture::<3, 1>::new(c, Combination::f(1), Fractal::octaves(3), Some(big)).is_err());
+}
