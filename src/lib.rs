@@ -38,7 +38,9 @@ pub mod definition;
 pub mod harness;
 pub mod math;
 pub mod perlin;
+pub mod picture;
 pub mod reference;
+pub mod render;
 pub mod simd;
 pub mod texture;
 

@@ -1,10 +1,19 @@
 //! The `worley` command: the main job (the harness on the default
-//! configuration) and `worley check` (the harness on any configuration).
+//! configuration and the image gallery), `worley check` (the harness on any
+//! configuration), `worley render` (one image), `worley tune` (the density
+//! sweep) and `worley ranges` (the combinations' output ranges).
 
+mod cli;
+
+use std::path::Path;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use cli::render::{render_command, RenderArgs};
+use cli::tune::{tune, TuneArgs};
+use cli::{ranges, RangesArgs};
 use worley::harness::{self, Campaign, Report};
+use worley::picture;
 use worley::{Config, Metric, Mode, Outputs, Reference, Simd};
 
 #[derive(Parser)]
@@ -18,6 +27,13 @@ struct Cli {
 enum Command {
     /// Run the harness on one configuration and print its report.
     Check(CheckArgs),
+    /// Render one image (PNG, and the raw values as PFM).
+    Render(RenderArgs),
+    /// Sweep the population density: speed against error per order.
+    Tune(TuneArgs),
+    /// Measure the output ranges of the standard combinations (the
+    /// constants in `worley::texture::DEFAULT_RANGES`).
+    Ranges(RangesArgs),
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -83,15 +99,47 @@ struct CheckArgs {
     json: bool,
 }
 
-fn parse_metric(s: &str) -> Result<Metric, String> {
+/// A command-line error as one line on standard error and exit code 2
+/// (help and version go to standard output with exit code 0).
+fn usage_error(e: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+        let _ = e.print();
+        return ExitCode::SUCCESS;
+    }
+    let text = e.to_string();
+    let parts: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .collect();
+    let mut line = parts.join("; ");
+    if let Some(rest) = line.strip_prefix("error: ") {
+        line = rest.to_string();
+    }
+    if matches!(e.kind(), ErrorKind::UnknownArgument | ErrorKind::InvalidSubcommand) {
+        line += "; see `worley --help` or `worley <command> --help` for what is accepted";
+    }
+    eprintln!("worley: {line}");
+    ExitCode::from(2)
+}
+
+/// The metric's command-line spelling (shared with `worley render`).
+pub fn parse_metric(s: &str) -> Result<Metric, String> {
     s.parse()
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(&e),
+    };
     let result = match cli.command {
         None => main_job(),
         Some(Command::Check(args)) => check(&args),
+        Some(Command::Render(args)) => render_command(&args),
+        Some(Command::Tune(args)) => tune(&args),
+        Some(Command::Ranges(args)) => ranges(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -286,7 +334,19 @@ fn main_job() -> Result<(), String> {
     std::fs::create_dir_all("out").map_err(|e| format!("cannot create out/: {e}"))?;
     let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
     write_atomically("out/harness.json", json.as_bytes())?;
-    println!("\nfull reports: out/harness.json ({:.1} s)", started.elapsed().as_secs_f64());
+
+    let drawn = std::time::Instant::now();
+    let images = cli::render::gallery(Path::new("out/gallery"), 384)?;
+    println!("\ngallery ({} images, {:.1} s on all cores):", images.len(), drawn.elapsed().as_secs_f64());
+    for path in &images {
+        println!("  {}", path.display());
+    }
+    println!("full reports: out/harness.json");
+    println!(
+        "files are in {}/out ({:.1} s in all)",
+        std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default(),
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 
@@ -301,10 +361,6 @@ fn dispatch(dim: usize, config: Config, campaign: &Campaign) -> Result<Report, S
 
 /// Writes to a temporary file in the same folder, then renames it, so no
 /// partial file is left behind on failure.
-fn write_atomically(path: &str, bytes: &[u8]) -> Result<(), String> {
-    let tmp = format!("{path}.tmp");
-    std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path)).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot write {path}: {e}")
-    })
+fn write_atomically(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), String> {
+    picture::write_atomically(path.as_ref(), bytes)
 }

@@ -1,0 +1,410 @@
+//! `worley render` and the gallery of the main job.
+
+use std::path::{Path, PathBuf};
+
+use clap::ValueEnum;
+use worley::config::DEFAULT_DENSITY;
+use worley::harness::uniform;
+use worley::picture::{self, ColourMap, Rgb};
+use worley::render::{self, Shading, View};
+use worley::texture::{Combination, Fractal, Range, Texture};
+use worley::{Config, Metric, Period};
+
+/// How values become colours (command-line form of [`Shading`]).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
+pub enum ShadeArg {
+    /// The value through the colour map.
+    Colour,
+    /// The value as a lit height field.
+    Bump,
+    /// Cells coloured by ID with mortar along F2 − F1.
+    Flagstones,
+}
+
+/// Options of `worley render`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Output PNG.
+    #[arg(long, default_value = "out/render.png")]
+    pub png: PathBuf,
+    /// Also write the raw values as a greyscale PFM (32-bit floats).
+    #[arg(long)]
+    pub pfm: Option<PathBuf>,
+    /// Dimension: 2, or a plane through 3D or 4D.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(2..=4))]
+    pub dim: u8,
+    /// The combination: F1, F2-F1, 0.5F1+2F3, F1*F2, F3^2-F2^2 (F1..F4).
+    #[arg(long, default_value = "F1", value_parser = parse_combination)]
+    pub combo: Combination,
+    /// Metric: euclidean, manhattan, chebyshev, or minkowski:P with P >= 1.
+    #[arg(long, default_value = "euclidean", value_parser = crate::parse_metric)]
+    pub metric: Metric,
+    /// Image size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub size: (usize, usize),
+    /// Input units across the image's width (user units; cells when periodic).
+    #[arg(long, default_value_t = 12.0)]
+    pub extent: f64,
+    /// The image's corner on axes 0 and 1, X,Y.
+    #[arg(long, default_value = "0,0", value_parser = parse_pair)]
+    pub origin: (f64, f64),
+    /// Coordinates on axes 2 and 3 for a plane through 3D or 4D, Z[,W].
+    #[arg(long, default_value = "0.5,0.5", value_parser = parse_pair)]
+    pub slice: (f64, f64),
+    /// Pattern seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Mean density λ of the population table.
+    #[arg(long, default_value_t = DEFAULT_DENSITY)]
+    pub density: f64,
+    /// Colour map: gray, heat, ice, earth.
+    #[arg(long, default_value = "heat", value_parser = parse_colour_map)]
+    pub colour: ColourMap,
+    /// Shading.
+    #[arg(long, value_enum, default_value_t = ShadeArg::Colour)]
+    pub shade: ShadeArg,
+    /// Bump height per unit of value (input units), for --shade bump.
+    #[arg(long, default_value_t = 0.6)]
+    pub strength: f32,
+    /// Fractal octaves (1: the plain combination).
+    #[arg(long, default_value_t = 1)]
+    pub octaves: u32,
+    /// Frequency factor between octaves.
+    #[arg(long, default_value_t = 2.0)]
+    pub lacunarity: f32,
+    /// Amplitude factor between octaves.
+    #[arg(long, default_value_t = 0.5)]
+    pub gain: f32,
+    /// Make the texture tile: whole cells per axis, P0,P1[,P2,P3]; the view
+    /// is then in cells (a tile is --extent P0).
+    #[arg(long, value_parser = parse_period)]
+    pub period: Option<Cells>,
+    /// Value range mapped to the colour map's ends, LO,HI (default: the
+    /// 0.1 % and 99.9 % quantiles over 100 000 random samples).
+    #[arg(long, value_parser = parse_pair)]
+    pub range: Option<(f64, f64)>,
+    /// Draw K random combinations C1F1+C2F2+C3F3+C4F4 (Figure 4.3 of the
+    /// chapter) into a sheet of tiles of --size each, and print them.
+    #[arg(long)]
+    pub random_combos: Option<usize>,
+    /// Seed of the random combinations.
+    #[arg(long, default_value_t = 1)]
+    pub combo_seed: u64,
+}
+
+fn parse_combination(s: &str) -> Result<Combination, String> {
+    let c: Combination = s.parse()?;
+    if c.order() > 4 {
+        return Err(format!("{s:?} needs F{}: the command line renders F1..F4", c.order()));
+    }
+    Ok(c)
+}
+
+fn parse_size(s: &str) -> Result<(usize, usize), String> {
+    let usage = "use WIDTHxHEIGHT with each from 1 to 16384, e.g. 512x512";
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("size {s:?}: {usage}"))?;
+    let parse = |v: &str| v.parse::<usize>().ok().filter(|n| (1..=16384).contains(n));
+    match (parse(w), parse(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("size {s:?}: {usage}")),
+    }
+}
+
+fn parse_pair(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<f64> = super::parse_list(s, "coordinate")?;
+    let ok = v.iter().all(|x| x.is_finite());
+    match v[..] {
+        [a] if ok => Ok((a, a)),
+        [a, b] if ok => Ok((a, b)),
+        _ => Err(format!("{s:?}: use one or two finite numbers, A[,B]")),
+    }
+}
+
+fn parse_colour_map(s: &str) -> Result<ColourMap, String> {
+    s.parse()
+}
+
+/// Whole cells per axis (the last one repeats for the remaining axes).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Cells(pub Vec<u32>);
+
+fn parse_period(s: &str) -> Result<Cells, String> {
+    let usage = format!("period {s:?}: use 1 to 4 whole numbers of cells from 1 to {}", worley::simd::MAX_PERIOD);
+    let v: Vec<u32> = super::parse_list(s, "period").map_err(|_| usage.clone())?;
+    if v.is_empty() || v.len() > 4 || v.iter().any(|&p| p == 0 || p > worley::simd::MAX_PERIOD) {
+        return Err(usage);
+    }
+    Ok(Cells(v))
+}
+
+impl RenderArgs {
+    fn config(&self) -> Config {
+        Config { seed: self.seed, metric: self.metric, density: self.density, ..Config::default() }
+    }
+
+    fn view(&self) -> View {
+        View {
+            width: self.size.0,
+            height: self.size.1,
+            origin: [self.origin.0, self.origin.1],
+            extent: self.extent,
+            slice: [self.slice.0, self.slice.1],
+        }
+    }
+
+    fn shading(&self) -> Shading {
+        match self.shade {
+            ShadeArg::Colour => Shading::Colour(self.colour),
+            ShadeArg::Bump => Shading::Bump { strength: self.strength, map: self.colour },
+            ShadeArg::Flagstones => Shading::Flagstones { mortar: 0.06 },
+        }
+    }
+
+    fn fractal(&self) -> Fractal {
+        Fractal { octaves: self.octaves, lacunarity: self.lacunarity, gain: self.gain }
+    }
+}
+
+/// Renders `combo` as the arguments say: raw values and the image.
+pub fn render_combo(args: &RenderArgs, combo: &Combination) -> Result<(Vec<f32>, Rgb, Range), String> {
+    fn go<const D: usize, const N: usize>(
+        args: &RenderArgs,
+        combo: &Combination,
+    ) -> Result<(Vec<f32>, Rgb, Range), String> {
+        let period = match &args.period {
+            None => None,
+            Some(Cells(p)) => {
+                let cells: [u32; D] = std::array::from_fn(|a| p.get(a).or(p.last()).copied().unwrap_or(1));
+                Some(Period::new(cells).map_err(|e| e.to_string())?)
+            }
+        };
+        let texture =
+            Texture::<D, N>::new(args.config(), combo.clone(), args.fractal(), period).map_err(|e| e.to_string())?;
+        let range = match args.range {
+            Some((lo, hi)) => Range { lo: lo as f32, hi: hi as f32 },
+            None => texture.measure_range(100_000, 1),
+        };
+        let (values, image) = render::render(&texture, &args.view(), args.shading(), range)?;
+        Ok((values, image, range))
+    }
+    let order = combo.order().max(if args.shade == ShadeArg::Flagstones { 2 } else { 1 });
+    match (args.dim, order) {
+        (2, 1) => go::<2, 1>(args, combo),
+        (2, 2) => go::<2, 2>(args, combo),
+        (2, 3) => go::<2, 3>(args, combo),
+        (2, _) => go::<2, 4>(args, combo),
+        (3, 1) => go::<3, 1>(args, combo),
+        (3, 2) => go::<3, 2>(args, combo),
+        (3, 3) => go::<3, 3>(args, combo),
+        (3, _) => go::<3, 4>(args, combo),
+        (_, 1) => go::<4, 1>(args, combo),
+        (_, 2) => go::<4, 2>(args, combo),
+        (_, 3) => go::<4, 3>(args, combo),
+        _ => go::<4, 4>(args, combo),
+    }
+}
+
+/// K random combinations C1F1+…+C4F4, coefficients uniform in [−1, 1]
+/// rounded to 0.05, never all zero.
+pub fn random_combinations(k: usize, seed: u64) -> Vec<Combination> {
+    (0..k)
+        .map(|i| {
+            let mut c: Vec<f32> = (0..4)
+                .map(|j| ((uniform(seed, (i * 4 + j) as u64) * 2.0 - 1.0) * 20.0).round() as f32 / 20.0 + 0.0)
+                .collect();
+            if c.iter().all(|&v| v == 0.0) {
+                c[0] = 1.0;
+            }
+            Combination::Linear(c)
+        })
+        .collect()
+}
+
+/// Tiles of equal size into one sheet, `columns` across, `gap` white
+/// pixels apart (NaN in the values).
+pub fn sheet(tiles: &[(Vec<f32>, Rgb)], columns: usize, gap: usize) -> (Vec<f32>, Rgb) {
+    let (w, h) = (tiles[0].1.width, tiles[0].1.height);
+    let rows = tiles.len().div_ceil(columns);
+    let (sw, sh) = (columns * w + (columns - 1) * gap, rows * h + (rows - 1) * gap);
+    let mut pixels = vec![[255u8; 3]; sw * sh];
+    let mut values = vec![f32::NAN; sw * sh];
+    for (t, (v, img)) in tiles.iter().enumerate() {
+        let (x0, y0) = ((t % columns) * (w + gap), (t / columns) * (h + gap));
+        for y in 0..h {
+            let dst = (y0 + y) * sw + x0;
+            pixels[dst..dst + w].copy_from_slice(&img.pixels[y * w..(y + 1) * w]);
+            values[dst..dst + w].copy_from_slice(&v[y * w..(y + 1) * w]);
+        }
+    }
+    (values, Rgb { width: sw, height: sh, pixels })
+}
+
+fn write_outputs(png: &Path, pfm: Option<&Path>, values: &[f32], image: &Rgb) -> Result<(), String> {
+    for p in std::iter::once(png).chain(pfm) {
+        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        }
+    }
+    picture::write_atomically(png, &image.to_png()?)?;
+    if let Some(pfm) = pfm {
+        picture::write_atomically(pfm, &picture::to_pfm(image.width, image.height, values))?;
+    }
+    Ok(())
+}
+
+/// `worley render`.
+pub fn render_command(args: &RenderArgs) -> Result<(), String> {
+    let started = std::time::Instant::now();
+    let (values, image) = match args.random_combos {
+        None => {
+            let (values, image, range) = render_combo(args, &args.combo)?;
+            println!("{}: range [{:.4}, {:.4}] mapped to the colour map", args.combo.name(), range.lo, range.hi);
+            (values, image)
+        }
+        Some(k) if (1..=64).contains(&k) => {
+            let combos = random_combinations(k, args.combo_seed);
+            let bar = super::progress(k as u64, "combinations");
+            let mut tiles = Vec::new();
+            for (i, c) in combos.iter().enumerate() {
+                let (v, img, _) = render_combo(args, c)?;
+                let Combination::Linear(cs) = c else { unreachable!("random combinations are linear") };
+                bar.suspend(|| {
+                    println!(
+                        "{:>3}: C = [{:+.2}, {:+.2}, {:+.2}, {:+.2}]  {}",
+                        i + 1,
+                        cs[0],
+                        cs[1],
+                        cs[2],
+                        cs[3],
+                        c.name()
+                    )
+                });
+                tiles.push((v, img));
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+            sheet(&tiles, (k as f64).sqrt().ceil() as usize, 2)
+        }
+        Some(k) => return Err(format!("--random-combos {k}: use 1 to 64")),
+    };
+    write_outputs(&args.png, args.pfm.as_deref(), &values, &image)?;
+    println!(
+        "wrote {} ({}x{}){} in {:.2} s",
+        args.png.display(),
+        image.width,
+        image.height,
+        args.pfm.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The gallery: the chapter's figures and textures, into `dir`. Returns the
+/// files written.
+pub fn gallery(dir: &Path, tile: usize) -> Result<Vec<PathBuf>, String> {
+    let base = RenderArgs {
+        png: PathBuf::new(),
+        pfm: None,
+        dim: 3,
+        combo: Combination::f(1),
+        metric: Metric::Euclidean,
+        size: (tile, tile),
+        extent: 8.0,
+        origin: (0.0, 0.0),
+        slice: (0.5, 0.5),
+        seed: 0,
+        density: DEFAULT_DENSITY,
+        colour: ColourMap::Heat,
+        shade: ShadeArg::Colour,
+        strength: 0.6,
+        octaves: 1,
+        lacunarity: 2.0,
+        gain: 0.5,
+        period: None,
+        range: None,
+        random_combos: None,
+        combo_seed: 1,
+    };
+    let with = |f: &dyn Fn(&mut RenderArgs)| {
+        let mut a = base.clone();
+        f(&mut a);
+        a
+    };
+    let one = |a: &RenderArgs| render_combo(a, &a.combo).map(|(v, i, _)| (v, i));
+    type Figure<'a> = (&'a str, Box<dyn Fn() -> Result<(Vec<f32>, Rgb), String> + 'a>);
+    let figures: Vec<Figure> = vec![
+        (
+            "fig4_2_f1_f2_f3_crackle.png",
+            Box::new(|| {
+                let tiles: Result<Vec<_>, String> = ["F1", "F2", "F3", "F2-F1"]
+                    .iter()
+                    .map(|c| one(&with(&|a| a.combo = c.parse().expect("a valid combination"))))
+                    .collect();
+                Ok(sheet(&tiles?, 2, 2))
+            }),
+        ),
+        (
+            "fig4_3_random_combinations.png",
+            Box::new(|| {
+                let a = with(&|a| a.size = (tile / 2, tile / 2));
+                let tiles: Result<Vec<_>, String> =
+                    random_combinations(16, 1).iter().map(|c| render_combo(&a, c).map(|(v, i, _)| (v, i))).collect();
+                Ok(sheet(&tiles?, 4, 2))
+            }),
+        ),
+        (
+            "fig4_10_manhattan_chebyshev.png",
+            Box::new(|| {
+                let tiles: Result<Vec<_>, String> = [Metric::Manhattan, Metric::Chebyshev]
+                    .iter()
+                    .map(|m| {
+                        one(&with(&|a| {
+                            a.metric = *m;
+                            a.colour = ColourMap::Ice;
+                        }))
+                    })
+                    .collect();
+                Ok(sheet(&tiles?, 2, 2))
+            }),
+        ),
+        (
+            "crumple.png",
+            Box::new(|| {
+                one(&with(&|a| {
+                    a.octaves = 5;
+                    a.shade = ShadeArg::Bump;
+                    a.strength = 0.1;
+                    a.colour = ColourMap::Ice;
+                }))
+            }),
+        ),
+        ("flagstones.png", Box::new(|| one(&with(&|a| a.shade = ShadeArg::Flagstones)))),
+        (
+            "tileable_2x2.png",
+            Box::new(|| {
+                let a = with(&|a| {
+                    a.combo = Combination::crackle();
+                    a.size = (tile / 2, tile / 2);
+                    a.period = Some(Cells(vec![6]));
+                    a.extent = 6.0;
+                    a.octaves = 3;
+                    a.colour = ColourMap::Earth;
+                });
+                let t = one(&a)?;
+                Ok(sheet(&[t.clone(), t.clone(), t.clone(), t], 2, 0))
+            }),
+        ),
+    ];
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let bar = super::progress(figures.len() as u64, "gallery");
+    let mut written = Vec::new();
+    for (name, make) in &figures {
+        let (_, image) = make()?;
+        let path = dir.join(name);
+        picture::write_atomically(&path, &image.to_png()?)?;
+        written.push(path);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(written)
+}

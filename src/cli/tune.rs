@@ -1,0 +1,308 @@
+//! `worley tune`: Worley's density tuning, measured. For each density λ (and
+//! bump of low populations), per order: the SIMD kernel's speed in exact
+//! mode, the wrong-rate of the window-only search, the share of samples the
+//! exact search must widen, and the statistics of F1.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use worley::harness::{self, sample_point, Campaign, Report};
+use worley::{Config, Mode, Outputs, Reference, Simd};
+
+/// Options of `worley tune`.
+#[derive(clap::Args, Debug)]
+pub struct TuneArgs {
+    /// Dimension: 2, 3 or 4.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(2..=4))]
+    pub dim: u8,
+    /// Densities λ to sweep, comma-separated.
+    #[arg(long, default_value = "1,1.5,2,2.5,3,4,5,6,8")]
+    pub densities: String,
+    /// Orders n to report, comma-separated (1, 2, 4 or 8).
+    #[arg(long, default_value = "1,2,4")]
+    pub orders: String,
+    /// Bumps of the 0/1 populations to sweep, comma-separated (Worley's
+    /// tuning; 0 is the plain Poisson table).
+    #[arg(long, default_value = "0")]
+    pub bumps: String,
+    /// Samples checked against brute force per setting and mode.
+    #[arg(long, default_value_t = 20_000)]
+    pub oracle_samples: usize,
+    /// Points timed per setting (best of three runs, one thread).
+    #[arg(long, default_value_t = 1 << 17)]
+    pub speed_samples: usize,
+    /// Samples and cells for the statistics (KS, grid bias).
+    #[arg(long, default_value_t = 200_000)]
+    pub statistics_samples: usize,
+    /// Folder for tune.json and tune.svg.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+}
+
+/// One measured setting.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Row {
+    /// Density λ.
+    pub density: f64,
+    /// Bump fraction.
+    pub bump: f64,
+    /// Order n.
+    pub order: usize,
+    /// SIMD kernel, exact mode, F1..Fn distances, M samples/s on one thread.
+    pub simd_mps: f64,
+    /// Share of samples whose F_n is wrong with the 3^d window only.
+    pub window_wrong: f64,
+    /// Share of samples the exact search widens beyond the 3^d block.
+    pub widened: f64,
+    /// KS distance of F1 from the Poisson law.
+    pub ks: f64,
+    /// Grid bias of F1 (centre against corner of cells).
+    pub grid_bias: f64,
+    /// Whether no other setting of the same order is at least as fast with
+    /// at most the same window wrong-rate (and better in one).
+    pub on_front: bool,
+}
+
+fn speed<const D: usize, const N: usize>(config: Config, samples: usize) -> Result<f64, String> {
+    let kernel = Simd::<D, N>::new(Config { order: N, ..config }, Outputs::Distances).map_err(|e| e.to_string())?;
+    let points: Vec<[f64; D]> = (0..samples).map(|i| sample_point(7, i, 1000.0)).collect();
+    let mut out = vec![worley::Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; samples];
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let t = Instant::now();
+        kernel.evaluate_slice(&points, &mut out).map_err(|e| e.to_string())?;
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    std::hint::black_box(&out);
+    Ok(samples as f64 / best / 1e6)
+}
+
+fn speed_of<const D: usize>(config: Config, samples: usize) -> Result<f64, String> {
+    match config.order {
+        1 => speed::<D, 1>(config, samples),
+        2 => speed::<D, 2>(config, samples),
+        4 => speed::<D, 4>(config, samples),
+        8 => speed::<D, 8>(config, samples),
+        n => Err(format!("order {n} is not swept: use 1, 2, 4 or 8")),
+    }
+}
+
+fn oracle<const D: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
+    let kernel = Reference::<D>::new(config).map_err(|e| e.to_string())?;
+    let mut report = Report::new::<D>("reference".into(), &config, kernel.pattern(), campaign);
+    harness::compare_with_oracle(&kernel, campaign, &mut report);
+    Ok(report)
+}
+
+fn statistics<const D: usize>(config: Config, campaign: &Campaign) -> Result<(f64, f64), String> {
+    let kernel = Reference::<D>::new(config).map_err(|e| e.to_string())?;
+    let mut report = Report::new::<D>("reference".into(), &config, kernel.pattern(), campaign);
+    harness::throughput_and_statistics(&kernel, campaign, &mut report);
+    Ok((report.ks, harness::grid_bias(&kernel, campaign)))
+}
+
+fn sweep<const D: usize>(
+    args: &TuneArgs,
+    densities: &[f64],
+    orders: &[usize],
+    bumps: &[f64],
+) -> Result<Vec<Row>, String> {
+    let bar = super::progress((densities.len() * bumps.len() * (1 + orders.len())) as u64, "settings");
+    let mut rows = Vec::new();
+    let top = *orders.iter().max().unwrap_or(&1);
+    for &bump in bumps {
+        for &density in densities {
+            let base = Config { density, bump, ..Config::default() };
+            let stats = Campaign {
+                samples: args.statistics_samples,
+                oracle_samples: 0,
+                pairs: 0,
+                grid_cells: args.statistics_samples,
+                ..Campaign::default()
+            };
+            let (ks, grid_bias) = statistics::<D>(base, &stats)?;
+            bar.inc(1);
+            let check = Campaign {
+                samples: 0,
+                oracle_samples: args.oracle_samples,
+                pairs: 0,
+                grid_cells: 0,
+                ..Campaign::default()
+            };
+            let exact = oracle::<D>(Config { order: top, ..base }, &check)?;
+            let window = oracle::<D>(Config { order: top, mode: Mode::Window, ..base }, &check)?;
+            for &order in orders {
+                let share = |n: u64| n as f64 / args.oracle_samples.max(1) as f64;
+                rows.push(Row {
+                    density,
+                    bump,
+                    order,
+                    simd_mps: speed_of::<D>(Config { order, ..base }, args.speed_samples)?,
+                    window_wrong: share(window.orders[order - 1].oracle_disagreements),
+                    // Widening for F_n is measured by the reference at the
+                    // sweep's top order: it records per order whether F_k
+                    // needed cells beyond the 3^d block.
+                    widened: share(exact.orders[order - 1].needs_wider),
+                    ks,
+                    grid_bias,
+                    on_front: false,
+                });
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    for i in 0..rows.len() {
+        let r = &rows[i];
+        let dominated = rows.iter().any(|o| {
+            o.order == r.order
+                && o.simd_mps >= r.simd_mps
+                && o.window_wrong <= r.window_wrong
+                && (o.simd_mps > r.simd_mps || o.window_wrong < r.window_wrong)
+        });
+        rows[i].on_front = !dominated;
+    }
+    Ok(rows)
+}
+
+/// `worley tune`.
+pub fn tune(args: &TuneArgs) -> Result<(), String> {
+    let densities: Vec<f64> = super::parse_list(&args.densities, "density")?;
+    let bumps: Vec<f64> = super::parse_list(&args.bumps, "bump")?;
+    let orders: Vec<usize> = super::parse_list(&args.orders, "order")?;
+    if let Some(n) = orders.iter().find(|n| ![1, 2, 4, 8].contains(*n)) {
+        return Err(format!("order {n} is not swept: use 1, 2, 4 or 8"));
+    }
+    for &density in &densities {
+        for &bump in &bumps {
+            Config { density, bump, ..Config::default() }.validate().map_err(|e| e.to_string())?;
+        }
+    }
+    let started = Instant::now();
+    let rows = match args.dim {
+        2 => sweep::<2>(args, &densities, &orders, &bumps)?,
+        3 => sweep::<3>(args, &densities, &orders, &bumps)?,
+        _ => sweep::<4>(args, &densities, &orders, &bumps)?,
+    };
+    println!(
+        "density sweep, {}D, seed 0, Euclidean; SIMD speed on one thread ({}), exact mode;",
+        args.dim,
+        worley::simd_level()
+    );
+    println!("window wrong-rate and widened share over {} samples against brute force", args.oracle_samples);
+    println!(
+        "{:>6} {:>5} {:>5} | {:>9} {:>12} {:>9} | {:>8} {:>9} | {:>5}",
+        "λ", "bump", "order", "SIMD M/s", "window wrong", "widened", "KS", "grid bias", "front"
+    );
+    for r in &rows {
+        let default = r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0;
+        println!(
+            "{:>6} {:>5} {:>5} | {:>9.2} {:>11.4}% {:>8.3}% | {:>8.5} {:>8.3}% | {:>5}{}",
+            r.density,
+            r.bump,
+            format!("F{}", r.order),
+            r.simd_mps,
+            100.0 * r.window_wrong,
+            100.0 * r.widened,
+            r.ks,
+            100.0 * r.grid_bias,
+            if r.on_front { "yes" } else { "no" },
+            if default { "  <- default" } else { "" }
+        );
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
+    let json = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
+    let (json_path, svg_path) = (args.out.join("tune.json"), args.out.join("tune.svg"));
+    worley::picture::write_atomically(&json_path, json.as_bytes())?;
+    worley::picture::write_atomically(&svg_path, plot(&rows, args.dim).as_bytes())?;
+    println!("\nwrote {} and {} ({:.1} s)", json_path.display(), svg_path.display(), started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// Speed against window wrong-rate (log scale), a line per order and bump,
+/// each point labelled with its λ; the default is ringed.
+pub fn plot(rows: &[Row], dim: u8) -> String {
+    let (w, h, left, bottom, top, right) = (720.0, 460.0, 70.0, 50.0, 40.0, 150.0);
+    let floor = 1e-5;
+    let x_of = |e: f64| e.max(floor).log10();
+    let (x_lo, x_hi) = (floor.log10(), rows.iter().map(|r| x_of(r.window_wrong)).fold(-1.0, f64::max).ceil());
+    let y_hi = rows.iter().map(|r| r.simd_mps).fold(1.0, f64::max) * 1.1;
+    let px = |e: f64| left + (x_of(e) - x_lo) / (x_hi - x_lo) * (w - left - right);
+    let py = |s: f64| h - bottom - s / y_hi * (h - top - bottom);
+    let colours = ["#c0392b", "#2471a3", "#229954", "#7d3c98", "#b9770e", "#555555"];
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n\
+         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
+         <text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{dim}D: SIMD speed (exact) against window-only error, per density λ</text>\n",
+        (w - right + left) / 2.0
+    );
+    svg += &format!(
+        "<line x1=\"{left}\" y1=\"{0}\" x2=\"{1}\" y2=\"{0}\" stroke=\"black\"/><line x1=\"{left}\" y1=\"{top}\" x2=\"{left}\" y2=\"{0}\" stroke=\"black\"/>\n",
+        h - bottom,
+        w - right
+    );
+    let mut decade = x_lo;
+    while decade <= x_hi + 1e-9 {
+        let x = px(10f64.powf(decade));
+        svg += &format!(
+            "<line x1=\"{x}\" y1=\"{0}\" x2=\"{x}\" y2=\"{1}\" stroke=\"#ddd\"/><text x=\"{x}\" y=\"{2}\" text-anchor=\"middle\">{3}%</text>\n",
+            h - bottom,
+            top,
+            h - bottom + 16.0,
+            100.0 * 10f64.powf(decade)
+        );
+        decade += 1.0;
+    }
+    for i in 0..=5 {
+        let s = y_hi * i as f64 / 5.0;
+        svg += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{s:.0}</text>\n", left - 6.0, py(s) + 4.0);
+    }
+    svg += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">share of samples with a wrong F_n using the 3^d window only (log; below 0.001 % drawn at 0.001 %)</text>\n",
+        (w - right + left) / 2.0,
+        h - 12.0
+    );
+    svg += &format!(
+        "<text transform=\"translate(18 {}) rotate(-90)\" text-anchor=\"middle\">M samples/s, one thread</text>\n",
+        (h - bottom + top) / 2.0
+    );
+    let mut series: Vec<(usize, f64)> = rows.iter().map(|r| (r.order, r.bump)).collect();
+    series.dedup();
+    series.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    series.dedup();
+    for (s, (order, bump)) in series.iter().enumerate() {
+        let colour = colours[s % colours.len()];
+        let points: Vec<&Row> = rows.iter().filter(|r| r.order == *order && r.bump == *bump).collect();
+        let path: Vec<String> =
+            points.iter().map(|r| format!("{:.1},{:.1}", px(r.window_wrong), py(r.simd_mps))).collect();
+        svg += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"{colour}\"/>\n", path.join(" "));
+        for r in &points {
+            let (x, y) = (px(r.window_wrong), py(r.simd_mps));
+            let fill = if r.on_front { colour } else { "white" };
+            svg += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"3.5\" fill=\"{fill}\" stroke=\"{colour}\"/>\n");
+            svg += &format!("<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\">{}</text>\n", x + 5.0, y - 5.0, r.density);
+            if r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0 {
+                svg += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"8\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n");
+            }
+        }
+        let ly = top + 20.0 + 18.0 * s as f64;
+        let label = if *bump == 0.0 { format!("F{order}") } else { format!("F{order}, bump {bump}") };
+        svg += &format!(
+            "<line x1=\"{0}\" y1=\"{ly}\" x2=\"{1}\" y2=\"{ly}\" stroke=\"{colour}\" stroke-width=\"2\"/><text x=\"{2}\" y=\"{3}\">{label}</text>\n",
+            w - right + 15.0,
+            w - right + 35.0,
+            w - right + 40.0,
+            ly + 4.0
+        );
+    }
+    let ly = top + 20.0 + 18.0 * series.len() as f64 + 10.0;
+    svg += &format!(
+        "<circle cx=\"{0}\" cy=\"{ly}\" r=\"8\" fill=\"none\" stroke=\"black\"/><text x=\"{1}\" y=\"{2}\">default λ</text>\n\
+         <text x=\"{1}\" y=\"{3}\">filled: on the front</text>\n</svg>\n",
+        w - right + 25.0,
+        w - right + 40.0,
+        ly + 4.0,
+        ly + 22.0
+    );
+    svg
+}

@@ -1,0 +1,181 @@
+//! The `worley` command: `render` writes a PNG of the requested size and a
+//! PFM holding the library's values at the documented pixel positions; bad
+//! options get one line and exit code 2; an unwritable output leaves nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use worley::picture::from_pfm;
+use worley::texture::{Combination, Fractal, Texture};
+use worley::{Config, Metric, Period};
+
+fn worley(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_worley")).args(args).output().expect("the worley binary runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("worley-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn png_size(path: &Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().expect("a PNG header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("a sane size")];
+    let info = reader.next_frame(&mut buf).expect("PNG data decodes");
+    (info.width, info.height)
+}
+
+/// Pixel (i, j) samples axes 0 and 1 at (origin + ½·step) + (i, j)·step with
+/// step = extent / width (the documentation of `worley::render`).
+fn pixel(origin: [f64; 2], extent: f64, width: usize, i: usize, j: usize) -> [f64; 2] {
+    let step = extent / width as f64;
+    [origin[0] + 0.5 * step + step * i as f64, origin[1] + 0.5 * step + step * j as f64]
+}
+
+#[test]
+fn render_writes_the_requested_png_and_the_librarys_values() {
+    let dir = scratch("render");
+    let (png, pfm) = (dir.join("crackle.png"), dir.join("crackle.pfm"));
+    let out = worley(&[
+        "render",
+        "--dim",
+        "3",
+        "--combo",
+        "F2-F1",
+        "--metric",
+        "manhattan",
+        "--size",
+        "37x23",
+        "--extent",
+        "5",
+        "--origin",
+        "1.5,-2",
+        "--slice",
+        "0.25",
+        "--seed",
+        "7",
+        "--octaves",
+        "2",
+        "--png",
+        png.to_str().unwrap(),
+        "--pfm",
+        pfm.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(png_size(&png), (37, 23));
+    let (w, h, values) = from_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+    assert_eq!((w, h), (37, 23));
+    let config = Config { seed: 7, metric: Metric::Manhattan, ..Config::default() };
+    let texture = Texture::<3, 2>::new(config, Combination::crackle(), Fractal::octaves(2), None).unwrap();
+    for j in 0..h {
+        for i in 0..w {
+            let [x, y] = pixel([1.5, -2.0], 5.0, w, i, j);
+            let want = texture.value([x, y, 0.25]);
+            assert_eq!(values[j * w + i].to_bits(), want.to_bits(), "pixel ({i}, {j})");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_periodic_render_tiles_and_matches_the_library() {
+    let dir = scratch("tile");
+    let pfm = dir.join("tile.pfm");
+    let out = worley(&[
+        "render",
+        "--dim",
+        "2",
+        "--combo",
+        "F1",
+        "--period",
+        "4,4",
+        "--extent",
+        "8",
+        "--size",
+        "32x32",
+        "--png",
+        dir.join("tile.png").to_str().unwrap(),
+        "--pfm",
+        pfm.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (w, _, values) = from_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+    let texture = Texture::<2, 1>::new(
+        Config::default(),
+        Combination::f(1),
+        Fractal::default(),
+        Some(Period::new([4, 4]).unwrap()),
+    )
+    .unwrap();
+    for j in 0..32 {
+        for i in 0..32 {
+            let v = values[j * w + i];
+            assert_eq!(v.to_bits(), texture.value(pixel([0.0, 0.0], 8.0, w, i, j)).to_bits());
+            // Eight cells across: the pixel four cells on is the same value.
+            if i < 16 && j < 16 {
+                assert_eq!(v.to_bits(), values[(j + 16) * w + i + 16].to_bits());
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn random_combinations_print_their_coefficients() {
+    let dir = scratch("combos");
+    let png = dir.join("sheet.png");
+    let out = worley(&[
+        "render",
+        "--random-combos",
+        "5",
+        "--combo-seed",
+        "3",
+        "--size",
+        "16x16",
+        "--png",
+        png.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().filter(|l| l.contains("C = [")).count(), 5, "{text}");
+    // Three columns of 16 pixels with 2-pixel gaps, two rows.
+    assert_eq!(png_size(&png), (52, 34));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_options_get_one_line_and_exit_code_2() {
+    let cases: [(&[&str], &str); 7] = [
+        (&["render", "--bogus"], "unexpected argument"),
+        (&["render", "--size", "0x4"], "WIDTHxHEIGHT"),
+        (&["render", "--shade", "shiny"], "possible values"),
+        (&["render", "--combo", "F2+G1"], "F1*F2"),
+        (&["render", "--octaves", "60"], "not resolved in f32"),
+        (&["check", "--metric", "minkowski:0.5"], "p >= 1"),
+        (&["tune", "--orders", "3"], "use 1, 2, 4 or 8"),
+    ];
+    for (args, words) in cases {
+        let out = worley(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(words), "{args:?}: {err:?} should say {words:?}");
+    }
+}
+
+#[test]
+fn an_unwritable_output_is_an_error_and_leaves_no_file() {
+    let dir = scratch("unwritable");
+    // The PNG's target is an existing folder: the final rename fails.
+    let taken = dir.join("taken.png");
+    std::fs::create_dir_all(taken.join("inside")).unwrap();
+    let out = worley(&["render", "--size", "8x8", "--png", taken.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8(out.stderr).unwrap().contains("cannot write"));
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("taken.png")]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
