@@ -645,11 +645,35 @@ pub const STANDARD: [&str; 7] = ["F1", "F2", "F3", "F4", "F2-F1", "F1*F2", "F3^2
 /// configuration (seed 0, λ 3, Euclidean, one octave): (dimension,
 /// combination, 0.1 % quantile, 99.9 % quantile) over 10^6 random samples,
 /// as printed by `worley ranges`. A test re-measures them.
-pub const DEFAULT_RANGES: &[(usize, &str, f32, f32)] = &[];
+pub const DEFAULT_RANGES: &[(usize, &str, f32, f32)] = &[
+    (2, "F1", 0.0355, 2.9725),
+    (2, "F2", 0.2426, 3.4278),
+    (2, "F3", 0.4955, 3.7882),
+    (2, "F4", 0.7436, 4.0796),
+    (2, "F2-F1", 0.0006, 2.3812),
+    (2, "F1*F2", 0.0198, 9.6073),
+    (2, "F3^2-F2^2", 0.0012, 8.8365),
+    (3, "F1", 0.1120, 2.1395),
+    (3, "F2", 0.3994, 2.3522),
+    (3, "F3", 0.6432, 2.5102),
+    (3, "F4", 0.8450, 2.6376),
+    (3, "F2-F1", 0.0004, 1.5401),
+    (3, "F1*F2", 0.0767, 4.8221),
+    (3, "F3^2-F2^2", 0.0007, 3.5893),
+    (4, "F1", 0.1941, 1.7884),
+    (4, "F2", 0.5085, 1.9258),
+    (4, "F3", 0.7310, 2.0202),
+    (4, "F4", 0.8940, 2.0978),
+    (4, "F2-F1", 0.0003, 1.1796),
+    (4, "F1*F2", 0.1506, 3.3275),
+    (4, "F3^2-F2^2", 0.0004, 2.2061),
+];
 
 /// The tabulated range of a standard combination in the default
 /// configuration, if there is one.
 pub fn default_range(dim: usize, combination: &Combination) -> Option<Range> {
-    let name = combination.name();
-    DEFAULT_RANGES.iter().find(|(d, n, _, _)| *d == dim && *n == name).map(|&(_, _, lo, hi)| Range { lo, hi })
+    DEFAULT_RANGES
+        .iter()
+        .find(|(d, n, _, _)| *d == dim && n.parse::<Combination>().as_ref() == Ok(combination))
+        .map(|&(_, _, lo, hi)| Range { lo, hi })
 }

@@ -1,0 +1,89 @@
+//! Textures against the plain basis on the same 4096 random points in
+//! [−1000, 1000]^3: F1 alone, F2 − F1 and F1·F2, fractal sums of 2 and 4
+//! octaves, and analytic gradients; and the paper's claim that F1 and F2
+//! together cost about as much as one scale of Perlin noise (improved
+//! noise, 8 lanes).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use std::hint::black_box;
+use std::time::Duration;
+use worley::harness::sample_point;
+use worley::perlin::Perlin;
+use worley::texture::{Combination, Fractal, Texture};
+use worley::{Config, Features32, Outputs, Simd};
+
+const POINTS: usize = 4096;
+
+fn points() -> Vec<[f64; 3]> {
+    (0..POINTS).map(|i| sample_point(7, i, 1000.0)).collect()
+}
+
+fn textures(c: &mut Criterion) {
+    let mut group = c.benchmark_group("texture/3d");
+    group.throughput(Throughput::Elements(POINTS as u64));
+    group.sample_size(20).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    let xs = points();
+    let mut out = vec![0f32; POINTS];
+    let config = Config::default();
+    let one = Fractal::default();
+    let cases: Vec<(&str, Box<dyn Fn(&[[f64; 3]], &mut [f32])>)> = vec![
+        ("F1", {
+            let t = Texture::<3, 1>::new(config, Combination::f(1), one, None).unwrap();
+            Box::new(move |x, o| t.values(x, o).unwrap())
+        }),
+        ("F2-F1", {
+            let t = Texture::<3, 2>::new(config, Combination::crackle(), one, None).unwrap();
+            Box::new(move |x, o| t.values(x, o).unwrap())
+        }),
+        ("F1*F2", {
+            let t = Texture::<3, 2>::new(config, Combination::Product, one, None).unwrap();
+            Box::new(move |x, o| t.values(x, o).unwrap())
+        }),
+        ("G1-2-octaves", {
+            let t = Texture::<3, 1>::new(config, Combination::f(1), Fractal::octaves(2), None).unwrap();
+            Box::new(move |x, o| t.values(x, o).unwrap())
+        }),
+        ("G1-4-octaves", {
+            let t = Texture::<3, 1>::new(config, Combination::f(1), Fractal::octaves(4), None).unwrap();
+            Box::new(move |x, o| t.values(x, o).unwrap())
+        }),
+        ("F1-gradient", {
+            let t = Texture::<3, 1>::new(config, Combination::f(1), one, None).unwrap();
+            Box::new(move |x, o| {
+                for (chunk, dst) in x.chunks_exact(8).zip(o.chunks_exact_mut(8)) {
+                    let g = t.gradient8(chunk.try_into().unwrap());
+                    dst.copy_from_slice(&(g.value + g.gradient[0]).to_array());
+                }
+            })
+        }),
+    ];
+    for (name, run) in &cases {
+        group.bench_function(BenchmarkId::new("values", name), |b| b.iter(|| run(black_box(&xs), &mut out)));
+    }
+    group.finish();
+}
+
+/// F1 and F2 together (distances only) against one octave of Perlin noise,
+/// both eight lanes per call.
+fn perlin_ratio(c: &mut Criterion) {
+    let mut group = c.benchmark_group("f1f2-vs-perlin/3d");
+    group.throughput(Throughput::Elements(POINTS as u64));
+    group.sample_size(20).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    let xs = points();
+    let kernel = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
+    let mut features = vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; POINTS];
+    group.bench_function("F1+F2", |b| b.iter(|| kernel.evaluate_slice(black_box(&xs), &mut features).unwrap()));
+    let noise = Perlin::new(0);
+    let mut out = vec![0f32; POINTS];
+    group.bench_function("perlin", |b| {
+        b.iter(|| {
+            for (chunk, dst) in black_box(&xs).chunks_exact(8).zip(out.chunks_exact_mut(8)) {
+                dst.copy_from_slice(&noise.noise8(chunk.try_into().unwrap()).to_array());
+            }
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, textures, perlin_ratio);
+criterion_main!(benches);
