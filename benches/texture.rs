@@ -26,7 +26,8 @@ fn textures(c: &mut Criterion) {
     let mut out = vec![0f32; POINTS];
     let config = Config::default();
     let one = Fractal::default();
-    let cases: Vec<(&str, Box<dyn Fn(&[[f64; 3]], &mut [f32])>)> = vec![
+    type Run = Box<dyn Fn(&[[f64; 3]], &mut [f32])>;
+    let cases: Vec<(&str, Run)> = vec![
         ("F1", {
             let t = Texture::<3, 1>::new(config, Combination::f(1), one, None).unwrap();
             Box::new(move |x, o| t.values(x, o).unwrap())
