@@ -34,6 +34,18 @@ enum Command {
     /// Measure the output ranges of the standard combinations (the
     /// constants in `worley::texture::DEFAULT_RANGES`).
     Ranges(RangesArgs),
+    /// Write only the image gallery of the main job.
+    Gallery(GalleryArgs),
+}
+
+#[derive(clap::Args)]
+struct GalleryArgs {
+    /// Folder for the images.
+    #[arg(long, default_value = "out/gallery")]
+    out: std::path::PathBuf,
+    /// Pixels per tile (figures of several tiles are larger).
+    #[arg(long, default_value_t = 384, value_parser = clap::value_parser!(u32).range(16..=4096))]
+    tile: u32,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -140,6 +152,11 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_command(&args),
         Some(Command::Tune(args)) => tune(&args),
         Some(Command::Ranges(args)) => ranges(&args),
+        Some(Command::Gallery(args)) => cli::render::gallery(&args.out, args.tile as usize).map(|written| {
+            for path in written {
+                println!("{}", path.display());
+            }
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
