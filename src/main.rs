@@ -152,7 +152,7 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_command(&args),
         Some(Command::Tune(args)) => tune(&args),
         Some(Command::Ranges(args)) => ranges(&args),
-        Some(Command::Gallery(args)) => cli::render::gallery(&args.out, args.tile as usize).map(|written| {
+        Some(Command::Gallery(args)) => cli::render::gallery(&args.out, args.tile as usize, true).map(|written| {
             for path in written {
                 println!("{}", path.display());
             }
@@ -190,6 +190,8 @@ fn check(args: &CheckArgs) -> Result<(), String> {
         pairs: args.pairs,
         grid_cells: args.grid_cells,
     };
+    let spinner = indicatif::ProgressBar::new_spinner().with_message("running the campaign");
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     let report = match args.kernel {
         KernelArg::Reference => dispatch(args.dim as usize, config, &campaign)?,
         KernelArg::Simd => match args.dim {
@@ -198,6 +200,7 @@ fn check(args: &CheckArgs) -> Result<(), String> {
             _ => run_simd::<4>(config, &campaign)?,
         },
     };
+    spinner.finish_and_clear();
     if args.json {
         println!("{}", report.to_json());
     } else {
@@ -239,41 +242,57 @@ fn run_reference<const D: usize>(config: Config, campaign: &Campaign) -> Result<
 fn main_job() -> Result<(), String> {
     let started = std::time::Instant::now();
     let mut reports = Vec::new();
-    println!("worley main job: the f64 reference and the 8-lane SIMD kernel, default configuration");
-    println!("(seed 0, λ {}, Euclidean); speed on one thread, checks on all cores\n", worley::config::DEFAULT_DENSITY);
+    // A progress bar on standard error (drawn on a terminal only); table
+    // lines go to standard output above it.
+    let bar = cli::progress(28, "main job");
+    macro_rules! say {
+        ($($t:tt)*) => { bar.suspend(|| println!($($t)*)) };
+    }
+    say!("worley main job: the f64 reference and the 8-lane SIMD kernel, default configuration");
+    say!("(seed 0, λ {}, Euclidean); speed on one thread, checks on all cores\n", worley::config::DEFAULT_DENSITY);
     let speed = Campaign { samples: 300_000, oracle_samples: 0, pairs: 0, grid_cells: 0, ..Campaign::default() };
     let accuracy =
         Campaign { samples: 200_000, oracle_samples: 100_000, pairs: 100_000, grid_cells: 0, ..Campaign::default() };
     let statistics =
         Campaign { samples: 1_000_000, oracle_samples: 0, pairs: 0, grid_cells: 1_000_000, ..Campaign::default() };
 
-    println!("speed (M samples/s, exact mode, random points in [-1000, 1000]^d)");
-    println!("{:>4} {:>8} {:>8} {:>8}", "dim", "F1", "F2", "F4");
+    say!("speed (M samples/s, exact mode, random points in [-1000, 1000]^d)");
+    say!("{:>4} {:>8} {:>8} {:>8}", "dim", "F1", "F2", "F4");
     for dim in 2..=4 {
-        print!("{:>4}", format!("{dim}D"));
+        let mut row = format!("{:>4}", format!("{dim}D"));
         for order in [1, 2, 4] {
             let r = dispatch(dim, Config { order, ..Config::default() }, &speed)?;
-            print!(" {:>8.3}", r.throughput / 1e6);
+            row += &format!(" {:>8.3}", r.throughput / 1e6);
             reports.push(r);
+            bar.inc(1);
         }
-        println!();
+        say!("{row}");
     }
 
     // Reference and SIMD side by side: speed next to error, per order.
     let versus =
         Campaign { samples: 300_000, oracle_samples: 50_000, pairs: 50_000, grid_cells: 0, ..Campaign::default() };
-    println!(
+    say!(
         "\nspeed against error: reference (f64) vs SIMD (8 lanes, f32, {}), exact mode, one thread;",
         worley::simd_level()
     );
-    println!(
+    say!(
         "error against brute force over {} samples, continuity over {} straddling pairs;",
-        versus.oracle_samples, versus.pairs
+        versus.oracle_samples,
+        versus.pairs
     );
-    println!("speed through the harness, which converts every result to its f64 report (see `cargo bench` for the kernels alone)");
-    println!(
+    say!("speed through the harness, which converts every result to its f64 report (see `cargo bench` for the kernels alone)");
+    say!(
         "{:>4} {:>5} | {:>9} {:>9} {:>6} | {:>10} {:>10} {:>6} {:>6}",
-        "dim", "order", "ref M/s", "SIMD M/s", "ratio", "ref maxerr", "SIMD maxerr", "wrong", "disc"
+        "dim",
+        "order",
+        "ref M/s",
+        "SIMD M/s",
+        "ratio",
+        "ref maxerr",
+        "SIMD maxerr",
+        "wrong",
+        "disc"
     );
     for dim in 2..=4 {
         for order in [1, 2, 4] {
@@ -287,7 +306,7 @@ fn main_job() -> Result<(), String> {
             let max_err = |rep: &Report| rep.orders.iter().map(|o| o.max_error).fold(0.0, f64::max);
             let wrong: u64 = v.orders.iter().map(|o| o.oracle_disagreements + o.id_disagreements).sum();
             let disc: u64 = v.orders.iter().map(|o| o.continuity_violations).sum();
-            println!(
+            say!(
                 "{:>4} {:>5} | {:>9.3} {:>9.3} {:>6.2} | {:>10.2e} {:>10.2e} {:>6} {:>6}",
                 format!("{dim}D"),
                 format!("F1-F{order}"),
@@ -301,6 +320,7 @@ fn main_job() -> Result<(), String> {
             );
             reports.push(r);
             reports.push(v);
+            bar.inc(1);
         }
     }
 
@@ -308,25 +328,29 @@ fn main_job() -> Result<(), String> {
     let mut window = Vec::new();
     for dim in 2..=4 {
         exact.push(dispatch(dim, Config { order: 8, ..Config::default() }, &accuracy)?);
+        bar.inc(1);
         window.push(dispatch(dim, Config { order: 8, mode: Mode::Window, ..Config::default() }, &accuracy)?);
+        bar.inc(1);
     }
     let ppm = |n: u64| 1e6 * n as f64 / accuracy.oracle_samples as f64;
-    println!(
+    say!(
         "\naccuracy against brute force ({} samples, {} straddling pairs per dimension)",
-        accuracy.oracle_samples, accuracy.pairs
+        accuracy.oracle_samples,
+        accuracy.pairs
     );
-    println!("  window: wrong F_k and discontinuous pairs (ppm) with the 3^d block only");
-    println!("  exact:  wrong F_k and discontinuous pairs (counts), and % of samples needing a wider search");
-    print!("{:>5}", "order");
+    say!("  window: wrong F_k and discontinuous pairs (ppm) with the 3^d block only");
+    say!("  exact:  wrong F_k and discontinuous pairs (counts), and % of samples needing a wider search");
+    let mut head = format!("{:>5}", "order");
     for dim in 2..=4 {
-        print!(" | {:>9} {:>9} {:>6} {:>6} {:>8}", format!("{dim}D win"), "win disc", "exact", "disc", "widen %");
+        head +=
+            &format!(" | {:>9} {:>9} {:>6} {:>6} {:>8}", format!("{dim}D win"), "win disc", "exact", "disc", "widen %");
     }
-    println!();
+    say!("{head}");
     for k in 0..8 {
-        print!("{:>5}", format!("F{}", k + 1));
+        let mut row = format!("{:>5}", format!("F{}", k + 1));
         for (e, w) in exact.iter().zip(&window) {
             let (eo, wo) = (&e.orders[k], &w.orders[k]);
-            print!(
+            row += &format!(
                 " | {:>9.1} {:>9.1} {:>6} {:>6} {:>8.4}",
                 ppm(wo.oracle_disagreements),
                 1e6 * wo.continuity_violations as f64 / accuracy.pairs as f64,
@@ -335,16 +359,17 @@ fn main_job() -> Result<(), String> {
                 100.0 * eo.needs_wider as f64 / accuracy.oracle_samples as f64
             );
         }
-        println!();
+        say!("{row}");
     }
     reports.extend(exact);
     reports.extend(window);
 
-    println!("\nstatistics of F1 ({} samples, grid bias over {} cells)", statistics.samples, statistics.grid_cells);
-    println!("{:>4} {:>9} {:>9} {:>10}", "dim", "mean F1", "KS", "grid bias");
+    say!("\nstatistics of F1 ({} samples, grid bias over {} cells)", statistics.samples, statistics.grid_cells);
+    say!("{:>4} {:>9} {:>9} {:>10}", "dim", "mean F1", "KS", "grid bias");
     for dim in 2..=4 {
         let r = dispatch(dim, Config::default(), &statistics)?;
-        println!("{:>4} {:>9.5} {:>9.5} {:>9.3}%", format!("{dim}D"), r.mean_f1, r.ks, 100.0 * r.grid_bias);
+        bar.inc(1);
+        say!("{:>4} {:>9.5} {:>9.5} {:>9.3}%", format!("{dim}D"), r.mean_f1, r.ks, 100.0 * r.grid_bias);
         reports.push(r);
     }
 
@@ -353,13 +378,16 @@ fn main_job() -> Result<(), String> {
     write_atomically("out/harness.json", json.as_bytes())?;
 
     let drawn = std::time::Instant::now();
-    let images = cli::render::gallery(Path::new("out/gallery"), 384)?;
-    println!("\ngallery ({} images, {:.1} s on all cores):", images.len(), drawn.elapsed().as_secs_f64());
+    bar.set_message("gallery");
+    let images = cli::render::gallery(Path::new("out/gallery"), 384, false)?;
+    bar.inc(1);
+    bar.finish_and_clear();
+    say!("\ngallery ({} images, {:.1} s on all cores):", images.len(), drawn.elapsed().as_secs_f64());
     for path in &images {
-        println!("  {}", path.display());
+        say!("  {}", path.display());
     }
-    println!("full reports: out/harness.json");
-    println!(
+    say!("full reports: out/harness.json");
+    say!(
         "files are in {}/out ({:.1} s in all)",
         std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default(),
         started.elapsed().as_secs_f64()

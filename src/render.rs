@@ -99,7 +99,11 @@ pub fn render<const D: usize, const N: usize>(
             let cells = Simd::<D, 2>::new(config, Outputs::Ids).map_err(|e| e.to_string())?;
             let stain = crate::perlin::Perlin::new(config.seed);
             per_block(&grid, n, |block| {
-                let f = cells.evaluate8(block);
+                // A periodic texture's flagstones tile with it.
+                let f = match texture.period() {
+                    Some(p) => cells.evaluate8_periodic(block, &p),
+                    None => cells.evaluate8(block),
+                };
                 let (f1, f2, id) = (f.distance[0].to_array(), f.distance[1].to_array(), f.id[0].to_array());
                 let spots = stain
                     .turbulence8(&block.map(|p| std::array::from_fn(|a| p.get(a).copied().unwrap_or(0.0) * 3.0)), 4)

@@ -240,7 +240,7 @@ impl std::fmt::Display for TextureError {
             TextureError::Gain(g) => write!(f, "gain {g} is invalid: use 0 < gain <= 1"),
             TextureError::Octaves { octaves, lacunarity, gain } => write!(
                 f,
-                "{octaves} octaves (lacunarity {lacunarity}, gain {gain}) are not resolved in f32: use 1 or more, \
+                "{octaves} octaves (lacunarity {lacunarity}, gain {gain}) are not resolved in f32: use 1 to 64, \
                  with gain^(octaves-1) >= 2^-24 and lacunarity^(octaves-1) <= 2^24"
             ),
         }

@@ -257,7 +257,10 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
     let started = std::time::Instant::now();
     let (values, image) = match args.random_combos {
         None => {
+            let spinner = indicatif::ProgressBar::new_spinner().with_message("rendering");
+            spinner.enable_steady_tick(std::time::Duration::from_millis(200));
             let (values, image, range) = render_combo(args, &args.combo)?;
+            spinner.finish_and_clear();
             println!("{}: range [{:.4}, {:.4}] mapped to the colour map", args.combo.name(), range.lo, range.hi);
             (values, image)
         }
@@ -301,7 +304,7 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
 
 /// The gallery: the chapter's figures and textures, into `dir`. Returns the
 /// files written.
-pub fn gallery(dir: &Path, tile: usize) -> Result<Vec<PathBuf>, String> {
+pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathBuf>, String> {
     let base = RenderArgs {
         png: PathBuf::new(),
         pfm: None,
@@ -396,7 +399,8 @@ pub fn gallery(dir: &Path, tile: usize) -> Result<Vec<PathBuf>, String> {
         ),
     ];
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let bar = super::progress(figures.len() as u64, "gallery");
+    let bar =
+        if show_progress { super::progress(figures.len() as u64, "gallery") } else { indicatif::ProgressBar::hidden() };
     let mut written = Vec::new();
     for (name, make) in &figures {
         let (_, image) = make()?;
