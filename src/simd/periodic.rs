@@ -59,13 +59,6 @@ impl<const D: usize> Period<D> {
     pub fn cells(&self) -> [u32; D] {
         self.0
     }
-
-    /// This period times `k` per axis (the period of an octave of integer
-    /// lacunarity `k`), or `None` past [`MAX_PERIOD`].
-    pub fn times(&self, k: u32) -> Option<Self> {
-        let cells: Option<Vec<u32>> = self.0.iter().map(|p| p.checked_mul(k).filter(|&v| v <= MAX_PERIOD)).collect();
-        cells.map(|c| Period(std::array::from_fn(|a| c[a])))
-    }
 }
 
 impl<const D: usize, const N: usize> Simd<D, N> {
