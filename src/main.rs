@@ -375,7 +375,7 @@ fn main_job() -> Result<(), String> {
 
     std::fs::create_dir_all("out").map_err(|e| format!("cannot create out/: {e}"))?;
     let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
-    write_atomically("out/harness.json", json.as_bytes())?;
+    picture::write_atomically(Path::new("out/harness.json"), json.as_bytes())?;
 
     let drawn = std::time::Instant::now();
     bar.set_message("gallery");
@@ -402,10 +402,4 @@ fn dispatch(dim: usize, config: Config, campaign: &Campaign) -> Result<Report, S
         4 => run_reference::<4>(config, campaign),
         _ => Err(format!("dimension {dim} is not supported: use 2, 3 or 4")),
     }
-}
-
-/// Writes to a temporary file in the same folder, then renames it, so no
-/// partial file is left behind on failure.
-fn write_atomically(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), String> {
-    picture::write_atomically(path.as_ref(), bytes)
 }

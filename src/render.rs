@@ -133,20 +133,6 @@ fn per_block<const D: usize>(
     shade: impl Fn(&[[f64; D]; 8]) -> [[u8; 3]; 8] + Sync,
 ) -> Vec<[u8; 3]> {
     let mut pixels = vec![[0u8; 3]; n];
-    let tile = |(t, dst): (usize, &mut [[u8; 3]])| {
-        for (c, d8) in dst.chunks_mut(8).enumerate() {
-            let start = t * crate::simd::TILE + c * 8;
-            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + i.min(d8.len() - 1)));
-            let colours = shade(&block);
-            d8.copy_from_slice(&colours[..d8.len()]);
-        }
-    };
-    #[cfg(feature = "parallel")]
-    {
-        use rayon::prelude::*;
-        pixels.par_chunks_mut(crate::simd::TILE).enumerate().for_each(tile);
-    }
-    #[cfg(not(feature = "parallel"))]
-    pixels.chunks_mut(crate::simd::TILE).enumerate().for_each(tile);
+    grid.fill_by_eights(&mut pixels, shade);
     pixels
 }

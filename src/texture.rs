@@ -460,21 +460,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         if out.len() != needed {
             return Err(crate::SizeError { needed, given: out.len() });
         }
-        let tile = |(t, dst): (usize, &mut [f32])| {
-            for (c, d8) in dst.chunks_mut(8).enumerate() {
-                let start = t * crate::simd::TILE + c * 8;
-                let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + i.min(d8.len() - 1)));
-                let v = self.value8(&block).to_array();
-                d8.copy_from_slice(&v[..d8.len()]);
-            }
-        };
-        #[cfg(feature = "parallel")]
-        {
-            use rayon::prelude::*;
-            out.par_chunks_mut(crate::simd::TILE).enumerate().for_each(tile);
-        }
-        #[cfg(not(feature = "parallel"))]
-        out.chunks_mut(crate::simd::TILE).enumerate().for_each(tile);
+        grid.fill_by_eights(out, |block| self.value8(block).to_array());
         Ok(())
     }
 
@@ -557,10 +543,12 @@ fn metric_gradient<const D: usize>(metric: Metric, f: f32x8, delta: &[f32x8; D])
                 }
             }
             Metric::Chebyshev => {
+                // The dominant axis; a tie for it is a diagonal, where no
+                // gradient exists.
                 let m = di.iter().fold(0f32, |m, v| m.max(v.abs()));
-                let at: Vec<usize> = (0..D).filter(|&a| di[a].abs() == m).collect();
-                ok[i] &= at.len() == 1;
-                gi[at[0]] = di[at[0]].signum();
+                let a = (0..D).position(|a| di[a].abs() == m).unwrap_or(0);
+                ok[i] &= (0..D).filter(|&b| di[b].abs() == m).count() == 1;
+                gi[a] = di[a].signum();
             }
             Metric::Minkowski(p) => {
                 let p = p as f32;

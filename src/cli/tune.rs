@@ -276,7 +276,6 @@ pub fn plot(rows: &[Row], dim: u8) -> String {
         (h - bottom + top) / 2.0
     );
     let mut series: Vec<(usize, f64)> = rows.iter().map(|r| (r.order, r.bump)).collect();
-    series.dedup();
     series.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     series.dedup();
     for (s, (order, bump)) in series.iter().enumerate() {

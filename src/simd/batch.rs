@@ -64,6 +64,26 @@ impl<const D: usize> Grid<D> {
         self.size.contains(&0)
     }
 
+    /// Fills `out` (one value per point, axis 0 fastest) eight points at a
+    /// time, in tiles of [`TILE`] on all cores with the `parallel` feature;
+    /// a tile's last block of fewer than eight repeats its last point.
+    pub(crate) fn fill_by_eights<T: Copy + Send>(&self, out: &mut [T], f: impl Fn(&[[f64; D]; 8]) -> [T; 8] + Sync) {
+        let tile = |(t, dst): (usize, &mut [T])| {
+            for (c, d8) in dst.chunks_mut(8).enumerate() {
+                let start = t * TILE + c * 8;
+                let block: [[f64; D]; 8] = std::array::from_fn(|i| self.point(start + i.min(d8.len() - 1)));
+                d8.copy_from_slice(&f(&block)[..d8.len()]);
+            }
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            out.par_chunks_mut(TILE).enumerate().for_each(tile);
+        }
+        #[cfg(not(feature = "parallel"))]
+        out.chunks_mut(TILE).enumerate().for_each(tile);
+    }
+
     /// The position of the point with linear index `index` (axis 0 fastest).
     pub fn point(&self, mut index: usize) -> [f64; D] {
         std::array::from_fn(|a| {
