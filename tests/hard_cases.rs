@@ -4,8 +4,8 @@
 //! compared with the brute-force oracle, and with the result one ulp away
 //! for continuity.
 
-use worley::harness::lattice_coordinate;
 use worley::harness::oracle::{brute_force, brute_force_in_cell};
+use worley::harness::{first_in_cell, lattice_coordinate};
 use worley::{Config, Features, Metric, Reference, INVALID_ID};
 
 /// A hard coordinate value in user units, derived from the scale S.
@@ -26,13 +26,13 @@ const CASES: &[Case] = &[
     },
     Case {
         name: "lattice 1000 + ulp",
-        reason: "one ulp above a face",
-        value: |s| lattice_coordinate(1000, s).unwrap().next_up(),
+        reason: "one ulp above the first coordinate of a cell (on its face when x·S = 1000 exists)",
+        value: |s| first_in_cell(1000, s).next_up(),
     },
     Case {
         name: "lattice −1000 − ulp",
-        reason: "one ulp below a negative face",
-        value: |s| lattice_coordinate(-1000, s).unwrap().next_down(),
+        reason: "the last coordinate before a negative face",
+        value: |s| first_in_cell(-1000, s).next_down(),
     },
     Case {
         name: "tiny negative", reason: "−1e−300: u + 1 rounds to a fraction of exactly 1.0", value: |_| -1e-300

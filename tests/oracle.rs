@@ -58,7 +58,7 @@ fn low_density_forces_wide_searches_that_stay_exact() {
 fn window_mode_is_measurably_wrong_at_high_order() {
     // The harness must be able to see failures: Worley's 3^d window misses
     // points for F8 in 2D at λ 3 (about 2 % of samples).
-    let config = Config { order: 8, mode: Mode::Window, ..Config::default() };
+    let config = Config { order: 8, mode: Mode::Window, density: 3.0, ..Config::default() };
     let r = run::<2>(config, &campaign(100_000, 100_000));
     assert!(r.orders[7].oracle_disagreements > 100, "{}", r.to_table());
     assert!(r.orders[7].continuity_violations > 100, "{}", r.to_table());

@@ -316,22 +316,35 @@ fn invalid_texture_parameters_are_rejected_with_the_reason() {
 #[test]
 fn tabulated_ranges_match_a_fresh_measurement() {
     use worley::texture::{default_range, DEFAULT_RANGES, STANDARD};
-    fn measure<const D: usize>(c: &Combination) -> worley::texture::Range {
-        Texture::<D, 4>::new(Config::default(), c.clone(), Fractal::default(), None).unwrap().measure_range(200_000, 99)
+    const SAMPLES: usize = 200_000;
+    // Fresh samples (another seed than `worley ranges` uses): the share below
+    // the tabulated 0.1 % quantile and the share above the 99.9 % one are each
+    // binomial with p = 0.001, σ = √(p(1 − p)/n) ≈ 7.1e-5; allow 5σ.
+    fn shares<const D: usize>(c: &Combination, lo: f32, hi: f32) -> (f64, f64) {
+        let t = Texture::<D, 4>::new(Config::default(), c.clone(), Fractal::default(), None).unwrap();
+        let points: Vec<[f64; D]> = (0..SAMPLES)
+            .map(|i| std::array::from_fn(|a| -1000.0 + 2000.0 * worley::harness::uniform(99, (i * D + a) as u64)))
+            .collect();
+        let mut v = vec![0f32; SAMPLES];
+        t.values(&points, &mut v).unwrap();
+        let below = v.iter().filter(|&&x| x < lo).count() as f64 / SAMPLES as f64;
+        let above = v.iter().filter(|&&x| x > hi).count() as f64 / SAMPLES as f64;
+        (below, above)
     }
+    let tolerance = 5.0 * (0.001f64 * 0.999 / SAMPLES as f64).sqrt();
     assert_eq!(DEFAULT_RANGES.len(), 3 * STANDARD.len());
     for &(dim, name, lo, hi) in DEFAULT_RANGES {
         let c: Combination = name.parse().unwrap();
         assert_eq!(default_range(dim, &c), Some(worley::texture::Range { lo, hi }));
-        // A different sample seed and 200 000 samples: the quantiles move by
-        // well under 2 % of the span.
-        let r = match dim {
-            2 => measure::<2>(&c),
-            3 => measure::<3>(&c),
-            _ => measure::<4>(&c),
+        let (below, above) = match dim {
+            2 => shares::<2>(&c, lo, hi),
+            3 => shares::<3>(&c, lo, hi),
+            _ => shares::<4>(&c, lo, hi),
         };
-        let slack = 0.02 * (hi - lo);
-        assert!((r.lo - lo).abs() <= slack && (r.hi - hi).abs() <= slack, "{dim}D {name}: {r:?} vs [{lo}, {hi}]");
+        assert!(
+            (below - 0.001).abs() <= tolerance && (above - 0.001).abs() <= tolerance,
+            "{dim}D {name}: {below} below {lo} and {above} above {hi}, expected 0.001 each within {tolerance}"
+        );
     }
     assert_eq!(default_range(3, &Combination::crackle()).map(|r| r.remap(0.0004)), Some(0.0));
     assert!(default_range(3, &Combination::Linear(vec![0.3, 0.7])).is_none());

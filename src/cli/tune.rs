@@ -28,7 +28,8 @@ pub struct TuneArgs {
     /// Samples checked against brute force per setting and mode.
     #[arg(long, default_value_t = 200_000)]
     pub oracle_samples: usize,
-    /// Points timed per setting (median of five runs, one thread).
+    /// Points timed per setting and order (median of seven runs in
+    /// interleaved rounds, one thread).
     #[arg(long, default_value_t = 1 << 17)]
     pub speed_samples: usize,
     /// Samples and cells for the statistics (KS, grid bias).
@@ -49,9 +50,9 @@ pub struct Row {
     /// Order n.
     pub order: usize,
     /// SIMD kernel, exact mode, F1..Fn distances, M samples/s on one
-    /// thread: the median of five runs.
+    /// thread: the median of seven runs, taken in rounds over all settings.
     pub simd_mps: f64,
-    /// The slowest and fastest of the five runs.
+    /// The slowest and fastest of the seven runs.
     pub simd_mps_spread: (f64, f64),
     /// Share of samples whose F_n is wrong with the 3^d window only.
     pub window_wrong: f64,
@@ -66,29 +67,41 @@ pub struct Row {
     /// more window error, and none has less window error at a median speed
     /// at least as high.
     pub on_front: bool,
+    /// This order's median speed as a share of the fastest median of the
+    /// same order among the settings swept.
+    pub share_of_best: f64,
+    /// Whether this setting (λ and bump, all orders together) is on the
+    /// joint front: one density serves every order, so a setting is
+    /// dominated only by one that is clearly faster at every order swept
+    /// with no more window error at any of them.
+    pub joint_front: bool,
 }
 
-fn speed<const D: usize, const N: usize>(config: Config, samples: usize) -> Result<(f64, f64, f64), String> {
+/// Runs of the speed measurement per setting and order.
+const RUNS: usize = 7;
+
+/// One timed pass of the 8-lane kernel over `points`: returns M samples/s.
+type Timer<'a> = Box<dyn FnMut() -> f64 + 'a>;
+
+fn timer<'a, const D: usize, const N: usize>(config: Config, points: &'a [[f64; D]]) -> Result<Timer<'a>, String> {
     let kernel = Simd::<D, N>::new(Config { order: N, ..config }, Outputs::Distances).map_err(|e| e.to_string())?;
-    let points: Vec<[f64; D]> = (0..samples).map(|i| sample_point(7, i, 1000.0)).collect();
-    let mut out = vec![worley::Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; samples];
-    let mut runs = [0f64; 5];
-    for r in runs.iter_mut() {
+    let mut out =
+        vec![worley::Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; points.len()];
+    Ok(Box::new(move || {
         let t = Instant::now();
-        kernel.evaluate_slice(&points, &mut out).map_err(|e| e.to_string())?;
-        *r = samples as f64 / t.elapsed().as_secs_f64() / 1e6;
-    }
-    std::hint::black_box(&out);
-    runs.sort_by(f64::total_cmp);
-    Ok((runs[2], runs[0], runs[4]))
+        // The length matches by construction, so this cannot fail.
+        let _ = kernel.evaluate_slice(points, &mut out);
+        std::hint::black_box(&out);
+        points.len() as f64 / t.elapsed().as_secs_f64() / 1e6
+    }))
 }
 
-fn speed_of<const D: usize>(config: Config, samples: usize) -> Result<(f64, f64, f64), String> {
+fn timer_of<'a, const D: usize>(config: Config, points: &'a [[f64; D]]) -> Result<Timer<'a>, String> {
     match config.order {
-        1 => speed::<D, 1>(config, samples),
-        2 => speed::<D, 2>(config, samples),
-        4 => speed::<D, 4>(config, samples),
-        8 => speed::<D, 8>(config, samples),
+        1 => timer::<D, 1>(config, points),
+        2 => timer::<D, 2>(config, points),
+        4 => timer::<D, 4>(config, points),
+        8 => timer::<D, 8>(config, points),
         n => Err(format!("order {n} is not swept: use 1, 2, 4 or 8")),
     }
 }
@@ -113,7 +126,8 @@ fn sweep<const D: usize>(
     orders: &[usize],
     bumps: &[f64],
 ) -> Result<Vec<Row>, String> {
-    let bar = super::progress((densities.len() * bumps.len() * (1 + orders.len())) as u64, "settings");
+    let settings = densities.len() * bumps.len();
+    let bar = super::progress((settings * (1 + RUNS * orders.len())) as u64, "steps");
     let mut rows = Vec::new();
     let top = *orders.iter().max().unwrap_or(&1);
     for &bump in bumps {
@@ -139,13 +153,12 @@ fn sweep<const D: usize>(
             let window = oracle::<D>(Config { order: top, mode: Mode::Window, ..base }, &check)?;
             for &order in orders {
                 let share = |n: u64| n as f64 / args.oracle_samples.max(1) as f64;
-                let (median, slowest, fastest) = speed_of::<D>(Config { order, ..base }, args.speed_samples)?;
                 rows.push(Row {
                     density,
                     bump,
                     order,
-                    simd_mps: median,
-                    simd_mps_spread: (slowest, fastest),
+                    simd_mps: 0.0,
+                    simd_mps_spread: (0.0, 0.0),
                     window_wrong: share(window.orders[order - 1].oracle_disagreements),
                     // Widening for F_n is measured by the reference at the
                     // sweep's top order: it records per order whether F_k
@@ -154,10 +167,34 @@ fn sweep<const D: usize>(
                     ks,
                     grid_bias,
                     on_front: false,
+                    share_of_best: 0.0,
+                    joint_front: false,
                 });
-                bar.inc(1);
             }
         }
+    }
+    // Speed in rounds: each round times every setting once, so a slow spell
+    // of a shared machine falls on all settings alike instead of on the few
+    // measured during it.
+    let points: Vec<[f64; D]> = (0..args.speed_samples).map(|i| sample_point(7, i, 1000.0)).collect();
+    let mut timers = Vec::with_capacity(rows.len());
+    for r in &rows {
+        timers.push(timer_of::<D>(
+            Config { density: r.density, bump: r.bump, order: r.order, ..Config::default() },
+            &points,
+        )?);
+    }
+    let mut runs = vec![[0f64; RUNS]; rows.len()];
+    for round in 0..RUNS {
+        for (t, r) in timers.iter_mut().zip(runs.iter_mut()) {
+            r[round] = t();
+            bar.inc(1);
+        }
+    }
+    for (row, mut r) in rows.iter_mut().zip(runs) {
+        r.sort_by(f64::total_cmp);
+        row.simd_mps = r[RUNS / 2];
+        row.simd_mps_spread = (r[0], r[RUNS - 1]);
     }
     bar.finish_and_clear();
     for i in 0..rows.len() {
@@ -167,7 +204,25 @@ fn sweep<const D: usize>(
                 && ((o.window_wrong <= r.window_wrong && o.simd_mps_spread.0 > r.simd_mps_spread.1)
                     || (o.window_wrong < r.window_wrong && o.simd_mps >= r.simd_mps))
         });
+        let best = rows.iter().filter(|o| o.order == r.order).map(|o| o.simd_mps).fold(0.0, f64::max);
         rows[i].on_front = !dominated;
+        rows[i].share_of_best = if best > 0.0 { rows[i].simd_mps / best } else { 0.0 };
+    }
+    let setting = |r: &Row| (r.density.to_bits(), r.bump.to_bits());
+    for i in 0..rows.len() {
+        let r = &rows[i];
+        let dominated = rows.iter().any(|o| {
+            setting(o) != setting(r)
+                && rows.iter().filter(|x| setting(x) == setting(r)).all(|x| {
+                    rows.iter().any(|y| {
+                        setting(y) == setting(o)
+                            && y.order == x.order
+                            && y.window_wrong <= x.window_wrong
+                            && y.simd_mps_spread.0 > x.simd_mps_spread.1
+                    })
+                })
+        });
+        rows[i].joint_front = !dominated;
     }
     Ok(rows)
 }
@@ -199,23 +254,46 @@ pub fn tune(args: &TuneArgs) -> Result<(), String> {
     println!("window wrong-rate and widened share over {} samples against brute force;", args.oracle_samples);
     println!("on the front: no setting of the same order is clearly faster (slowest run above this one's fastest) with no more error, or has less error at a median speed at least as high");
     println!(
-        "{:>6} {:>5} {:>5} | {:>9} {:>13} | {:>12} {:>9} | {:>8} {:>9} | {:>5}",
-        "λ", "bump", "order", "SIMD M/s", "(runs)", "window wrong", "widened", "KS", "grid bias", "front"
+        "{:>6} {:>5} {:>5} | {:>9} {:>13} {:>6} | {:>12} {:>9} | {:>8} {:>9} | {:>5}",
+        "λ", "bump", "order", "SIMD M/s", "(runs)", "share", "window wrong", "widened", "KS", "grid bias", "front"
     );
     for r in &rows {
         let default = r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0;
         println!(
-            "{:>6} {:>5} {:>5} | {:>9.2} {:>13} | {:>11.4}% {:>8.3}% | {:>8.5} {:>8.3}% | {:>5}{}",
+            "{:>6} {:>5} {:>5} | {:>9.2} {:>13} {:>6.3} | {:>11.4}% {:>8.3}% | {:>8.5} {:>8.3}% | {:>5}{}",
             r.density,
             r.bump,
             format!("F{}", r.order),
             r.simd_mps,
             format!("{:.2}-{:.2}", r.simd_mps_spread.0, r.simd_mps_spread.1),
+            r.share_of_best,
             100.0 * r.window_wrong,
             100.0 * r.widened,
             r.ks,
             100.0 * r.grid_bias,
             if r.on_front { "yes" } else { "no" },
+            if default { "  <- default" } else { "" }
+        );
+    }
+    println!("\nper setting, all orders together (share: the worst order's median over that order's fastest median;");
+    println!("joint front: no other setting is clearly faster at every order with no more window error at any)");
+    println!("{:>6} {:>5} | {:>12} {:>6} | {:>11}", "λ", "bump", "worst share", "order", "joint front");
+    let mut seen = Vec::new();
+    for r in &rows {
+        if seen.contains(&(r.density.to_bits(), r.bump.to_bits())) {
+            continue;
+        }
+        seen.push((r.density.to_bits(), r.bump.to_bits()));
+        let same = rows.iter().filter(|o| o.density == r.density && o.bump == r.bump);
+        let worst = same.min_by(|a, b| a.share_of_best.total_cmp(&b.share_of_best)).unwrap_or(r);
+        let default = r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0;
+        println!(
+            "{:>6} {:>5} | {:>12.3} {:>6} | {:>11}{}",
+            r.density,
+            r.bump,
+            worst.share_of_best,
+            format!("F{}", worst.order),
+            if r.joint_front { "yes" } else { "no" },
             if default { "  <- default" } else { "" }
         );
     }
@@ -288,7 +366,13 @@ pub fn plot(rows: &[Row], dim: u8) -> String {
             let (x, y) = (px(r.window_wrong), py(r.simd_mps));
             let fill = if r.on_front { colour } else { "white" };
             svg += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"3.5\" fill=\"{fill}\" stroke=\"{colour}\"/>\n");
-            svg += &format!("<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\">{}</text>\n", x + 5.0, y - 5.0, r.density);
+            let weight = if r.joint_front { "bold" } else { "normal" };
+            svg += &format!(
+                "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\" font-weight=\"{weight}\">{}</text>\n",
+                x + 5.0,
+                y - 5.0,
+                r.density
+            );
             if r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0 {
                 svg += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"8\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n");
             }
@@ -306,11 +390,17 @@ pub fn plot(rows: &[Row], dim: u8) -> String {
     let ly = top + 20.0 + 18.0 * series.len() as f64 + 10.0;
     svg += &format!(
         "<circle cx=\"{0}\" cy=\"{ly}\" r=\"8\" fill=\"none\" stroke=\"black\"/><text x=\"{1}\" y=\"{2}\">default λ</text>\n\
-         <text x=\"{1}\" y=\"{3}\">filled: on the front</text>\n</svg>\n",
+         <text x=\"{1}\" y=\"{3}\">filled: on the front</text>\n\
+         <text x=\"{1}\" y=\"{4}\">of its order</text>\n\
+         <text x=\"{1}\" y=\"{5}\" font-weight=\"bold\">bold λ: on the</text>\n\
+         <text x=\"{1}\" y=\"{6}\" font-weight=\"bold\">joint front</text>\n</svg>\n",
         w - right + 25.0,
         w - right + 40.0,
         ly + 4.0,
-        ly + 22.0
+        ly + 22.0,
+        ly + 36.0,
+        ly + 54.0,
+        ly + 68.0
     );
     svg
 }

@@ -302,6 +302,24 @@ pub fn lattice_coordinate(k: i64, scale: f64) -> Option<f64> {
     None
 }
 
+/// The smallest user coordinate x whose cell is `k`, that is, with the
+/// rounded product x·S at least k. It lies exactly on the face when some x
+/// has x·S = k ([`lattice_coordinate`]) and is the first coordinate past it
+/// otherwise; `first_in_cell(k, S).next_down()` is the last one before it.
+pub fn first_in_cell(k: i64, scale: f64) -> f64 {
+    let k = k as f64;
+    let mut x = k / scale;
+    // Rounded multiplication by a positive constant is monotone in x, and
+    // k / S is within an ulp or two of the answer.
+    while x * scale >= k {
+        x = x.next_down();
+    }
+    while x * scale < k {
+        x = x.next_up();
+    }
+    x
+}
+
 /// Straddling pairs: faces, edges and corners (and, every fourth pair,
 /// a point exactly on a lattice plane against its neighbour one ulp below).
 pub fn continuity<const D: usize, K: Kernel<D>>(kernel: &K, campaign: &Campaign, report: &mut Report) {
@@ -433,6 +451,20 @@ mod tests {
         // Not every integer is x·S for some double x (the products skip some
         // when ulp(x)·S exceeds ulp(k)), but most are.
         assert!(found > 1000, "{found}");
+    }
+
+    #[test]
+    fn first_in_cell_is_the_boundary_of_the_cell() {
+        for scale in [0.4123456789, 0.5780, 1.0, 3.0f64.sqrt()] {
+            for k in [-1_000_000i64, -1000, -1, 0, 1, 7, 1000, 1 << 40] {
+                let x = first_in_cell(k, scale);
+                assert!((x * scale).floor() == k as f64, "S {scale}, k {k}: x {x}");
+                assert!((x.next_down() * scale) < k as f64, "S {scale}, k {k}: x {x} is not the first");
+                if lattice_coordinate(k, scale).is_some() {
+                    assert_eq!(x * scale, k as f64, "S {scale}, k {k}: a face exists but x {x} is past it");
+                }
+            }
+        }
     }
 
     #[test]
