@@ -415,6 +415,23 @@ mod tests {
     }
 
     #[test]
+    fn default_table_has_poisson_dispersion() {
+        // The README's reason for λ 5 over λ 6: at λ 5 the table's variance
+        // equals its mean, as a Poisson law's does, to 10^-4.
+        let dispersion = |lambda: f64| {
+            let t = PopulationTable::poisson(lambda, 0.0).unwrap();
+            let n = t.entries().len() as f64;
+            let mean = t.entries().iter().map(|&e| e as f64).sum::<f64>() / n;
+            let var = t.entries().iter().map(|&e| (e as f64 - mean).powi(2)).sum::<f64>() / n;
+            var / mean
+        };
+        assert!((dispersion(crate::config::DEFAULT_DENSITY) - 1.0).abs() < 1e-4);
+        assert!(dispersion(6.0) < 0.995 && dispersion(3.0) < 0.996);
+        let t = PopulationTable::poisson(crate::config::DEFAULT_DENSITY, 0.0).unwrap();
+        assert_eq!(t.max_population(), 13);
+    }
+
+    #[test]
     fn bump_raises_the_stated_fraction_of_low_entries() {
         let plain = PopulationTable::poisson(2.5, 0.0).unwrap();
         let bumped = PopulationTable::poisson(2.5, 0.75).unwrap();

@@ -4,7 +4,7 @@
 //! - `grid`: a 256 × 256 slice (step 0.125, z = 0.5).
 //!
 //! What each one computes (none of the peers is the same function):
-//! - `worley` F1 / F1F2: Poisson process, λ 3 per cell, exact (certified
+//! - `worley` F1 / F1F2: Poisson process, λ 5 per cell (the default), exact (certified
 //!   search), isotropic; mean F1 = 1 user unit (one point per 1.8 units³^⅓).
 //! - quick-noise `Cellular` (batch, one octave): one jittered point per cell
 //!   on a 3^3 window; its own output scale.
