@@ -306,6 +306,8 @@ pub fn lattice_coordinate(k: i64, scale: f64) -> Option<f64> {
 /// rounded product x·S at least k. It lies exactly on the face when some x
 /// has x·S = k ([`lattice_coordinate`]) and is the first coordinate past it
 /// otherwise; `first_in_cell(k, S).next_down()` is the last one before it.
+/// `scale` is a pattern's scale S (positive and finite) and |k| at most
+/// 2^53.
 pub fn first_in_cell(k: i64, scale: f64) -> f64 {
     let k = k as f64;
     let mut x = k / scale;
