@@ -97,7 +97,10 @@ struct CheckArgs {
     /// Straddling pairs for the continuity check.
     #[arg(long, default_value_t = 200_000)]
     pairs: usize,
-    /// Cells for the grid bias.
+    /// Cells for the grid bias, drawn from [-range, range]^d: with fewer
+    /// distinct cells there than this (about 2·10^5 in 2D at the default
+    /// range and λ), the bias is that one region's; the main job uses a
+    /// range of 10^4.
     #[arg(long, default_value_t = 1_000_000)]
     grid_cells: usize,
     /// Samples are uniform in [-range, range]^d.
