@@ -322,9 +322,7 @@ fn tabulated_ranges_match_a_fresh_measurement() {
     // binomial with p = 0.001, σ = √(p(1 − p)/n) ≈ 7.1e-5; allow 5σ.
     fn shares<const D: usize>(c: &Combination, lo: f32, hi: f32) -> (f64, f64) {
         let t = Texture::<D, 4>::new(Config::default(), c.clone(), Fractal::default(), None).unwrap();
-        let points: Vec<[f64; D]> = (0..SAMPLES)
-            .map(|i| std::array::from_fn(|a| -1000.0 + 2000.0 * worley::harness::uniform(99, (i * D + a) as u64)))
-            .collect();
+        let points: Vec<[f64; D]> = (0..SAMPLES).map(|i| worley::harness::sample_point(99, i, 1000.0)).collect();
         let mut v = vec![0f32; SAMPLES];
         t.values(&points, &mut v).unwrap();
         let below = v.iter().filter(|&&x| x < lo).count() as f64 / SAMPLES as f64;

@@ -77,6 +77,13 @@ pub struct Row {
     pub joint_front: bool,
 }
 
+impl Row {
+    /// The setting this row measures (λ and bump), comparable exactly.
+    fn setting(&self) -> (u64, u64) {
+        (self.density.to_bits(), self.bump.to_bits())
+    }
+}
+
 /// Runs of the speed measurement per setting and order.
 const RUNS: usize = 7;
 
@@ -208,14 +215,13 @@ fn sweep<const D: usize>(
         rows[i].on_front = !dominated;
         rows[i].share_of_best = if best > 0.0 { rows[i].simd_mps / best } else { 0.0 };
     }
-    let setting = |r: &Row| (r.density.to_bits(), r.bump.to_bits());
     for i in 0..rows.len() {
         let r = &rows[i];
         let dominated = rows.iter().any(|o| {
-            setting(o) != setting(r)
-                && rows.iter().filter(|x| setting(x) == setting(r)).all(|x| {
+            o.setting() != r.setting()
+                && rows.iter().filter(|x| x.setting() == r.setting()).all(|x| {
                     rows.iter().any(|y| {
-                        setting(y) == setting(o)
+                        y.setting() == o.setting()
                             && y.order == x.order
                             && y.window_wrong <= x.window_wrong
                             && y.simd_mps_spread.0 > x.simd_mps_spread.1
@@ -280,11 +286,11 @@ pub fn tune(args: &TuneArgs) -> Result<(), String> {
     println!("{:>6} {:>5} | {:>12} {:>6} | {:>11}", "λ", "bump", "worst share", "order", "joint front");
     let mut seen = Vec::new();
     for r in &rows {
-        if seen.contains(&(r.density.to_bits(), r.bump.to_bits())) {
+        if seen.contains(&r.setting()) {
             continue;
         }
-        seen.push((r.density.to_bits(), r.bump.to_bits()));
-        let same = rows.iter().filter(|o| o.density == r.density && o.bump == r.bump);
+        seen.push(r.setting());
+        let same = rows.iter().filter(|o| o.setting() == r.setting());
         let worst = same.min_by(|a, b| a.share_of_best.total_cmp(&b.share_of_best)).unwrap_or(r);
         let default = r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0;
         println!(
