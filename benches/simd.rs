@@ -56,7 +56,7 @@ fn parallel(c: &mut Criterion) {
 
 fn benches(c: &mut Criterion) {
     parallel(c);
-    println!("SIMD level compiled in: {}", worley::simd_level());
+    println!("SIMD level: {}", worley::simd_level());
     pair::<2, 1>(c, Metric::Euclidean);
     pair::<2, 2>(c, Metric::Euclidean);
     pair::<2, 4>(c, Metric::Euclidean);

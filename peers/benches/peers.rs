@@ -100,7 +100,7 @@ fn peers(c: &mut Criterion, random: &[[f32; 3]], grid: &[[f32; 3]]) {
 }
 
 fn benches(c: &mut Criterion) {
-    println!("SIMD level compiled in: {}", worley::simd_level());
+    println!("SIMD level: {}", worley::simd_level());
     let (random, grid) = points();
     ours::<1>(c, &random, &grid);
     ours::<2>(c, &random, &grid);

@@ -233,7 +233,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// Eight samples given as cells and fractions ([`Simd::evaluate_in_cell`]).
     pub fn evaluate8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8]) -> super::Features8<D, N> {
         let located = in_cell::<Eight, D>(cells, fractions);
-        let best = self.dispatch::<Eight>(&located);
+        let best = self.dispatch8(&located);
         super::Features8 { distance: best.rank, delta: best.delta, id: best.id }
     }
 }

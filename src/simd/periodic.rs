@@ -75,7 +75,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// bit-identical to [`Simd::evaluate_periodic`] of `x[i]`.
     pub fn evaluate8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>) -> Features8<D, N> {
         let located = wrap::<Eight, D>(x, period);
-        let best = self.dispatch::<Eight>(&located);
+        let best = self.dispatch8(&located);
         Features8 { distance: best.rank, delta: best.delta, id: best.id }
     }
 }
