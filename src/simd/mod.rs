@@ -873,15 +873,17 @@ mod runtime_avx2_tests {
         }
         for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
             let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+            let mut lanewise = 0;
             for batch in 0..1500 {
-                // Ordinary points, points far out (the lane-wise locate) and a
-                // NaN lane among good ones.
-                let range = [40.0, 3.0e9][batch % 2];
+                // Ordinary points, points beyond 2^31 cells in some lanes (the
+                // lane-wise locate) and a NaN lane among good ones.
+                let range = [40.0, 3.0e10][batch % 2];
                 let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(11, batch * 8 + i, range));
                 if batch % 7 == 0 {
                     points[batch % 8][0] = f64::NAN;
                 }
                 let located = kernel.locate::<Eight>(&points);
+                lanewise += usize::from(located.cell.is_some());
                 let plain = kernel.dispatch::<Eight>(&located);
                 // SAFETY: `runtime_avx2` returned true above.
                 #[allow(unsafe_code)]
@@ -896,6 +898,7 @@ mod runtime_avx2_tests {
                     }
                 }
             }
+            assert!(lanewise >= 700, "only {lanewise} of 1500 batches took the lane-wise locate");
         }
     }
 
