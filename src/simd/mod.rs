@@ -913,11 +913,12 @@ mod runtime_avx2_tests {
 
     #[test]
     fn the_avx2_recompilation_gives_the_sse2_bits() {
+        // Euclidean only: the other metrics run the same out-of-line code
+        // (`search_outputs`) in both copies.
         same::<2, 3>(Config { order: 3, ..Config::default() });
         same::<3, 1>(Config::default());
-        same::<3, 4>(Config { order: 4, metric: Metric::Manhattan, ..Config::default() });
-        same::<4, 2>(Config { order: 2, metric: Metric::Chebyshev, ..Config::default() });
-        same::<3, 2>(Config { order: 2, metric: Metric::Minkowski(3.0), ..Config::default() });
+        same::<3, 4>(Config { order: 4, ..Config::default() });
+        same::<4, 2>(Config { order: 2, ..Config::default() });
         same::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
         same::<3, 2>(Config { order: 2, mode: Mode::Window, ..Config::default() });
         same::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
