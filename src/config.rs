@@ -45,15 +45,29 @@ impl Metric {
     }
 
     /// A monotone "rank" of the length of `v`: the squared length for
-    /// Euclidean, Σ|vᵢ|^p for Minkowski, the length itself otherwise. Searches
-    /// compare ranks so that no root is taken per candidate point.
+    /// Euclidean, the length itself otherwise. Searches compare ranks so that
+    /// no square root is taken per candidate point.
+    ///
+    /// For Minkowski the length is computed as m·(Σ(|vᵢ|/m)^p)^(1/p) with
+    /// m = max|vᵢ|: every power is of a number in [0, 1] and the sum lies in
+    /// [1, d], so nothing overflows or underflows for any finite p ≥ 1
+    /// (Σ|vᵢ|^p itself overflows f64 for |vᵢ| = 3 at p ≈ 650 and flushes to
+    /// zero for |vᵢ| = 0.1 at p ≈ 310). A term that underflows is below the
+    /// sum's rounding, so dropping it is exact to rounding.
     #[inline]
     pub fn rank(self, v: &[f64]) -> f64 {
         match self {
             Metric::Euclidean => v.iter().map(|x| x * x).sum(),
             Metric::Manhattan => v.iter().map(|x| x.abs()).sum(),
             Metric::Chebyshev => v.iter().fold(0.0, |m, x| m.max(x.abs())),
-            Metric::Minkowski(p) => v.iter().map(|x| x.abs().powf(p)).sum(),
+            Metric::Minkowski(p) => {
+                let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                if m == 0.0 || m.is_infinite() {
+                    return m;
+                }
+                let sum: f64 = v.iter().map(|x| (x.abs() / m).powf(p)).sum();
+                m * sum.powf(1.0 / p)
+            }
         }
     }
 
@@ -62,8 +76,7 @@ impl Metric {
     pub fn rank_of_distance(self, d: f64) -> f64 {
         match self {
             Metric::Euclidean => d * d,
-            Metric::Manhattan | Metric::Chebyshev => d,
-            Metric::Minkowski(p) => d.powf(p),
+            Metric::Manhattan | Metric::Chebyshev | Metric::Minkowski(_) => d,
         }
     }
 
@@ -72,8 +85,7 @@ impl Metric {
     pub fn distance_of_rank(self, r: f64) -> f64 {
         match self {
             Metric::Euclidean => r.sqrt(),
-            Metric::Manhattan | Metric::Chebyshev => r,
-            Metric::Minkowski(p) => r.powf(1.0 / p),
+            Metric::Manhattan | Metric::Chebyshev | Metric::Minkowski(_) => r,
         }
     }
 

@@ -27,12 +27,16 @@
 //! The 64-bit seed is folded once into two 32-bit keys: with
 //! `z = splitmix64(seed)` (the finaliser of Steele, Lea and Flood's SplitMix64
 //! applied to `seed + 0x9E3779B97F4A7C15`), `k_init = z mod 2^32` and
-//! `k_final = z / 2^32`. A cell's hash is then, in wrapping 32-bit arithmetic,
+//! `k_final = z / 2^32`. Each axis term first goes through a full mix of its
+//! own, its *axis word*, and the words are then chained, in wrapping 32-bit
+//! arithmetic:
 //!
 //! ```text
+//! w_a = fmix32(t_a ^ M_a)                       for each axis a = 0 .. d−1
 //! h = k_init
-//! for each axis a = 0 .. d−1:   h = (h ^ t_a) · M_a;  h = h ^ (h >> 16)
-//! h = fmix32(h ^ k_final)
+//! for each axis a = 0 .. d−1:   h = (h ^ w_a) · M_a;  h = h ^ (h >> 16)
+//! s = w_0 + … + w_{d−2}                          (every axis but the last)
+//! h = fmix32((h + s) ^ k_final)
 //! ```
 //!
 //! with `M = [0x9E3779B1, 0x85EBCA77, 0xC2B2AE3D, 0x27D4EB2F]` (the 32-bit
@@ -41,7 +45,26 @@
 //! Every step is a bijection of a 32-bit word, so there is no period at 256,
 //! 289 or 2^16 cells, one axis step changes every output bit with probability
 //! ½, and the key pair (a bijection of the seed) changes the whole pattern.
-//! It needs d + 2 multiplies of 32-bit lanes, no 64-bit arithmetic.
+//!
+//! **Why each axis word is mixed before it enters the chain.** If a term
+//! entered the chain as it is (`h ^ t_a`), two rows of cells whose chains
+//! before axis a differ by δ (`h_A ^ h_B = δ`) would hold the same points at
+//! `t` and `t ^ δ` for every `t`: whole rows, pencils or planes of cells
+//! copied with a shift, and for some seeds many such pairs lie a few cells
+//! apart. With a non-linear word, `h_A ^ w(t) = h_B ^ w(t')` holds for a
+//! pair of cells by chance only, never along a run, so no strip of cells
+//! repeats (the harness's `repeated_runs` counts this).
+//!
+//! **Why the sum s.** The chain summarises the axes before the last in 32
+//! bits, so two rows of cells along the last axis whose chains meet before
+//! it (chance 2^−32 per pair of rows: about one pair among the 45^3 rows of
+//! a 4D window) would be copies along the whole axis. The sum of their words
+//! is a second, independent 32-bit summary, so such rows repeat only where
+//! both meet (2^−64 per pair). It costs d − 1 additions.
+//!
+//! The words of one sample's neighbouring cells are shared, so a kernel
+//! mixes three words per axis per sample, not one per cell; the chain costs
+//! d + 2 multiplies per cell.
 //!
 //! ## Population
 //! The hash is the state s₀ of the linear congruential generator
@@ -53,7 +76,9 @@
 //!
 //! ## Feature points
 //! Point j (0-based) of a cell takes the d + 1 states s_{1+j(d+1)} ..
-//! s_{(j+1)(d+1)}: the first is its **feature ID**, the next d give its
+//! s_{(j+1)(d+1)}: the first is its **feature ID** (the state itself, except
+//! that the state `0xFFFFFFFF`, which is [`INVALID_ID`], is reported as
+//! `0xFFFFFFFE`: see [`feature_id`]), the next d give its
 //! coordinates. A coordinate is the state's top 24 bits as a fixed-point
 //! fraction of the cell, `(s >> 8) / 2^24`, in [0, 1 − 2^−24]; the point's
 //! cell coordinates are `c_a + (s >> 8) · 2^−24`, which an f32 holds exactly
@@ -158,22 +183,45 @@ pub const fn axis_term(c: i64) -> u32 {
     lo.wrapping_add(hi.wrapping_mul(HIGH_WORD_MUL))
 }
 
-/// The hash of a cell (the LCG's initial state s₀), from the cells' axis
-/// terms.
+/// The axis word of axis `axis`'s term `t`: the term mixed on its own
+/// before it enters the chain (see module docs).
 #[inline]
-pub fn hash_terms(keys: SeedKeys, terms: &[u32]) -> u32 {
+pub const fn axis_word(axis: usize, t: u32) -> u32 {
+    fmix32(t ^ AXIS_MUL[axis])
+}
+
+/// The hash of a cell (the LCG's initial state s₀), from the cell's axis
+/// words ([`axis_word`]).
+#[inline]
+pub fn hash_words(keys: SeedKeys, words: &[u32]) -> u32 {
     let mut h = keys.init;
-    for (t, m) in terms.iter().zip(AXIS_MUL) {
-        h = (h ^ t).wrapping_mul(m);
+    for (w, m) in words.iter().zip(AXIS_MUL) {
+        h = (h ^ w).wrapping_mul(m);
         h ^= h >> 16;
     }
-    fmix32(h ^ keys.finish)
+    let s = words[..words.len().saturating_sub(1)].iter().fold(0u32, |s, w| s.wrapping_add(*w));
+    fmix32(h.wrapping_add(s) ^ keys.finish)
 }
 
 /// The hash of a cell given by its integer coordinates.
 #[inline]
 pub fn cell_hash<const D: usize>(keys: SeedKeys, cell: [i64; D]) -> u32 {
-    hash_terms(keys, &cell.map(axis_term))
+    let words: [u32; D] = std::array::from_fn(|a| axis_word(a, axis_term(cell[a])));
+    hash_words(keys, &words)
+}
+
+/// The feature ID of a point whose ID state is `s`: the state itself, except
+/// that the one state equal to [`INVALID_ID`] is reported as
+/// `INVALID_ID − 1`, so that no real feature point carries the sentinel. IDs
+/// stay uniform over the other 2^32 − 1 values, with `0xFFFF_FFFE` twice as
+/// likely as any other (2^−31 instead of 2^−32 per point).
+#[inline]
+pub const fn feature_id(s: u32) -> u32 {
+    if s == INVALID_ID {
+        INVALID_ID - 1
+    } else {
+        s
+    }
 }
 
 /// A 256-entry table of cell populations.
@@ -340,7 +388,7 @@ impl<const D: usize> Pattern<D> {
         let mut s = s0;
         for _ in 0..self.table.population(s0) {
             s = lcg_step(s);
-            let id = s;
+            let id = feature_id(s);
             let mut fraction = [0u32; D];
             for f in fraction.iter_mut() {
                 s = lcg_step(s);
@@ -461,17 +509,23 @@ mod tests {
         let pattern = Pattern::<3>::new(&Config { seed: 42, ..Config::default() }).unwrap();
         let z = splitmix64(42);
         let mut h = z as u32;
-        for (c, m) in [3i64, -7, 11].into_iter().zip(AXIS_MUL) {
-            h = (h ^ (c as u32)).wrapping_mul(m);
+        let mut sum = 0u32;
+        for (axis, (c, m)) in [3i64, -7, 11].into_iter().zip(AXIS_MUL).enumerate() {
+            let w = fmix32((c as u32) ^ m);
+            h = (h ^ w).wrapping_mul(m);
             h ^= h >> 16;
+            if axis < 2 {
+                sum = sum.wrapping_add(w);
+            }
         }
-        let s0 = fmix32(h ^ (z >> 32) as u32);
+        let s0 = fmix32(h.wrapping_add(sum) ^ (z >> 32) as u32);
         let n = pattern.table().entries()[(s0 >> 24) as usize] as usize;
         let points = pattern.points([3, -7, 11]);
         assert_eq!(points.len(), n);
         for (j, p) in points.iter().enumerate() {
             let (a, c) = lcg_jump(1 + 4 * j as u32);
-            assert_eq!(p.id, a.wrapping_mul(s0).wrapping_add(c));
+            let state = a.wrapping_mul(s0).wrapping_add(c);
+            assert_eq!(p.id, if state == u32::MAX { u32::MAX - 1 } else { state });
             for axis in 0..3 {
                 let (a, c) = lcg_jump(2 + 4 * j as u32 + axis as u32);
                 assert_eq!(p.fraction[axis], a.wrapping_mul(s0).wrapping_add(c) >> 8);

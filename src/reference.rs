@@ -20,9 +20,10 @@
 //!    closer point and the result is certified; otherwise the next shell of
 //!    cells (Chebyshev radius r + 1) is searched, pruned the same way.
 //!
-//! In [`Mode::Window`] step 3 is skipped. Ranks (squared distances for
-//! Euclidean, Σ|d|^p for Minkowski) are compared instead of distances, so no
-//! root is taken per candidate. Ties keep the point found first.
+//! In [`Mode::Window`] step 3 is skipped. Ranks ([`Metric::rank`]: squared
+//! distances for Euclidean, the distance itself otherwise) are compared
+//! instead of distances, so no square root is taken per candidate. Ties keep
+//! the point found first.
 //!
 //! ## Bad input
 //! A non-finite coordinate, or one with |x·S| > [`MAX_CELL_COORD`], gives

@@ -41,7 +41,17 @@ impl Bytes<'_> {
             0 => Metric::Euclidean,
             1 => Metric::Manhattan,
             2 => Metric::Chebyshev,
-            _ => Metric::Minkowski(1.0 + f64::from(self.byte() % 64) / 16.0),
+            // Exponents from 1 to 4.94 in steps of 1/16, or powers of two
+            // up to 2^20, where |d|^p overflows or flushes to zero in f32
+            // and f64 alike.
+            _ => {
+                let e = self.byte();
+                if e & 0x80 == 0 {
+                    Metric::Minkowski(1.0 + f64::from(e % 64) / 16.0)
+                } else {
+                    Metric::Minkowski(f64::from(e % 21).exp2())
+                }
+            }
         }
     }
 }

@@ -16,7 +16,9 @@
 //!   the metric distance between a and b plus both error bounds;
 //! - **statistics**: mean F1, the Kolmogorov–Smirnov distance between the
 //!   sampled F1 and the Poisson law P(F1 > r) = exp(−ρ·V·r^d), and the grid
-//!   bias (mean F1 at cell centres over mean F1 at cell corners, minus one).
+//!   bias (mean F1 at cell centres over mean F1 at cell corners, minus one);
+//! - **repeated strips**: cells whose hashes repeat along a run, against the
+//!   uniform-hash expectation ([`repeats`]).
 //!
 //! Samples are drawn from a counter-based generator, so every figure is
 //! reproducible from the campaign's seed, and the parallel parts give the
@@ -24,6 +26,7 @@
 
 pub mod fuzz;
 pub mod oracle;
+pub mod repeats;
 pub mod report;
 
 use std::time::Instant;
@@ -190,6 +193,10 @@ pub fn run<const D: usize, K: Kernel<D>>(kernel: &K, campaign: &Campaign) -> Rep
     compare_with_oracle(kernel, campaign, &mut report);
     continuity(kernel, campaign, &mut report);
     report.grid_bias = grid_bias(kernel, campaign);
+    // As many cells as the grid bias samples, at least 2 per axis.
+    let side = (campaign.grid_cells as f64).powf(1.0 / D as f64).floor().max(2.0) as i64;
+    let keys = kernel.pattern().keys();
+    report.repeats = Some(repeats::repeated_runs::<D>(side, |c| crate::definition::cell_hash(keys, c)));
     report
 }
 

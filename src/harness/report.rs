@@ -61,6 +61,9 @@ pub struct Report {
     pub straddled: u64,
     /// Per order k = 1..n.
     pub orders: Vec<OrderReport>,
+    /// Repeated strips of cells in a window around the origin (the cell
+    /// hash against the uniform-hash expectation), when measured.
+    pub repeats: Option<super::repeats::Repeats>,
 }
 
 impl Report {
@@ -83,6 +86,7 @@ impl Report {
             pairs: 0,
             straddled: 0,
             orders: vec![OrderReport::default(); config.order],
+            repeats: None,
         }
     }
 
@@ -149,6 +153,13 @@ impl Report {
                 per(o.needs_wider, self.campaign.oracle_samples),
                 o.continuity_violations,
                 o.max_excess
+            );
+        }
+        if let Some(r) = &self.repeats {
+            let _ = writeln!(
+                s,
+                "  cell hash, {} cells around the origin: {} repeated runs of two cells (a uniform hash: {:.1e}), {} equal cells (a uniform hash: {:.0})",
+                r.cells, r.equal_runs, r.expected_equal_runs, r.equal_cells, r.expected_equal_cells
             );
         }
         s

@@ -68,6 +68,8 @@ pub trait Lanes: Copy + 'static {
     fn u_xor(a: Self::U, b: Self::U) -> Self::U;
     /// a & b
     fn u_and(a: Self::U, b: Self::U) -> Self::U;
+    /// min(a, b), unsigned
+    fn u_min(a: Self::U, b: Self::U) -> Self::U;
     /// a >> 16
     fn u_shr16(a: Self::U) -> Self::U;
     /// a >> 13
@@ -199,6 +201,10 @@ impl Lanes for One {
         a & b
     }
     #[inline(always)]
+    fn u_min(a: u32, b: u32) -> u32 {
+        a.min(b)
+    }
+    #[inline(always)]
     fn u_shr16(a: u32) -> u32 {
         a >> 16
     }
@@ -318,6 +324,10 @@ impl Lanes for Eight {
     #[inline(always)]
     fn u_and(a: u32x8, b: u32x8) -> u32x8 {
         a & b
+    }
+    #[inline(always)]
+    fn u_min(a: u32x8, b: u32x8) -> u32x8 {
+        a.min(b)
     }
     #[inline(always)]
     fn u_shr16(a: u32x8) -> u32x8 {

@@ -167,15 +167,18 @@ pub struct Simd<const D: usize, const N: usize> {
     inv_scale: f32,
 }
 
-/// A lane's located sample: the axis terms of the cells around it and its
+/// A lane's located sample: the axis words of the cells around it and its
 /// fraction in its own cell.
 struct Located<L: Lanes, const D: usize> {
-    /// Axis terms of the cells at offsets −1, 0, +1, per axis.
-    terms: [[L::U; 3]; D],
+    /// Axis words ([`axis_word`](crate::definition::axis_word)) of the cells at offsets −1, 0, +1, per axis.
+    words: [[L::U; 3]; D],
+    /// The raw axis term of the sample's own cell, per axis (its low word
+    /// when the lane is within [`FAST_RANGE`]).
+    centre: [L::U; D],
     /// The fraction f ∈ [0, 1] per axis, rounded to f32.
     f: [L::F; D],
     /// Cells per axis and lane, kept only when some lane is outside the fast
-    /// range (the wide search recomputes them from the terms otherwise).
+    /// range (the wide search recomputes them from `centre` otherwise).
     cell: Option<[[i64; 8]; D]>,
     /// Lanes with a valid input.
     valid: [bool; 8],
@@ -186,7 +189,7 @@ struct Located<L: Lanes, const D: usize> {
 
 impl<L: Lanes, const D: usize> Located<L, D> {
     /// Lanes from per-lane i64 cells and fractions (already in units of
-    /// [`UNIT`]): the full axis terms of every neighbour, kept cells.
+    /// [`UNIT`]): the full axis words of every neighbour, kept cells.
     fn lanewise(cell: [[i64; 8]; D], f: &[[f32; 8]; D], valid: [bool; 8]) -> Self {
         Self::wrapped(cell, f, valid, None)
     }
@@ -194,8 +197,15 @@ impl<L: Lanes, const D: usize> Located<L, D> {
     /// As [`Located::lanewise`], with the cells wrapped by `period`.
     fn wrapped(cell: [[i64; 8]; D], f: &[[f32; 8]; D], valid: [bool; 8], period: Option<[i64; D]>) -> Self {
         Located {
-            terms: std::array::from_fn(|a| {
-                std::array::from_fn(|o| terms::<L>(&cell[a], o as i64 - 1, period.map(|p| p[a])))
+            words: std::array::from_fn(|a| {
+                std::array::from_fn(|o| words::<L>(a, &cell[a], o as i64 - 1, period.map(|p| p[a])))
+            }),
+            centre: std::array::from_fn(|a| {
+                let mut t = [0u32; 8];
+                for (ti, c) in t.iter_mut().zip(&cell[a]).take(L::N) {
+                    *ti = axis_term(*c);
+                }
+                L::u_load(&t[..L::N])
             }),
             f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
             cell: Some(cell),
@@ -363,10 +373,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             return self.locate_lanewise(xs);
         }
         Located {
-            terms: std::array::from_fn(|a| {
+            words: std::array::from_fn(|a| {
                 let t = L::u_load(&lo[a][..L::N]);
-                [L::u_add(t, L::u(u32::MAX)), t, L::u_add(t, L::u(1))]
+                // Written out: an array `map` here stayed a call with copies.
+                [word::<L>(a, L::u_add(t, L::u(u32::MAX))), word::<L>(a, t), word::<L>(a, L::u_add(t, L::u(1)))]
             }),
+            centre: std::array::from_fn(|a| L::u_load(&lo[a][..L::N])),
             f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
             cell: None,
             valid: [true; 8],
@@ -402,7 +414,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             (Metric::Euclidean, Outputs::IdsAndDeltas) => self.search::<L, Euclid, true, true>(Euclid, at),
             (Metric::Manhattan, o) => self.search_outputs::<L, Manhattan>(Manhattan, o, at),
             (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev>(Chebyshev, o, at),
-            (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski>(Minkowski(p as f32), o, at),
+            (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski>(Minkowski(p), o, at),
         };
         let (unit, inv) = (L::f(1.0 / UNIT), L::f(self.inv_scale));
         let metric = self.config.metric;
@@ -449,7 +461,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             Best::<L, D, N> { rank: [L::f(f32::INFINITY); N], delta: [[L::f(0.0); D]; N], id: [L::u(INVALID_ID); N] };
         let one = L::f(UNIT);
         // Per axis, indexed by the mirrored offset + 1 (near, own, far): the
-        // axis term, the sample minus the cell's corner, and the metric's
+        // axis word, the sample minus the cell's corner, and the metric's
         // term of the gap between the sample and the cell.
         let mut terms = [[L::u(0); 3]; D];
         let mut shifted = [[L::f(0.0); 3]; D];
@@ -457,7 +469,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         for a in 0..D {
             let f = at.f[a];
             let flip = L::lt(L::f(0.5 * UNIT), f);
-            let t = at.terms[a];
+            let t = at.words[a];
             terms[a] = [L::select_u(flip, t[2], t[0]), t[1], L::select_u(flip, t[0], t[2])];
             let (below, above) = (L::add(f, one), L::sub(f, one));
             shifted[a] = [L::select(flip, above, below), f, L::select(flip, below, above)];
@@ -523,13 +535,13 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let cell = at.cell.unwrap_or_else(|| {
             std::array::from_fn(|a| {
                 let mut lo = [0u32; 8];
-                L::u_store(at.terms[a][1], &mut lo[..L::N]);
+                L::u_store(at.centre[a], &mut lo[..L::N]);
                 lo.map(|t| i64::from(t as i32))
             })
         });
         for r in 2..=MAX_SHELLS {
             for offset in shell::<D>(r) {
-                let t: [L::U; D] = std::array::from_fn(|a| terms::<L>(&cell[a], offset[a], at.period.map(|p| p[a])));
+                let t: [L::U; D] = std::array::from_fn(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
                 let gaps: [L::F; D] = std::array::from_fn(|a| {
                     let o = offset[a];
                     if o > 0 {
@@ -560,21 +572,19 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// The cell hash (see [`definition`](crate::definition)) in u32 lanes,
-    /// from the cell's axis terms.
+    /// from the cell's axis words.
     #[inline(always)]
-    fn hash<L: Lanes>(&self, terms: [L::U; D]) -> L::U {
+    fn hash<L: Lanes>(&self, words: [L::U; D]) -> L::U {
         let keys = self.pattern.keys();
         let mut h = L::u(keys.init);
-        for (t, m) in terms.iter().zip(AXIS_MUL) {
+        for (t, m) in words.iter().zip(AXIS_MUL) {
             h = L::u_mul(L::u_xor(h, *t), L::u(m));
             h = L::u_xor(h, L::u_shr16(h));
         }
-        h = L::u_xor(h, L::u(keys.finish));
-        h = L::u_xor(h, L::u_shr16(h));
-        h = L::u_mul(h, L::u(0x85EB_CA6B));
-        h = L::u_xor(h, L::u_shr13(h));
-        h = L::u_mul(h, L::u(0xC2B2_AE35));
-        L::u_xor(h, L::u_shr16(h))
+        for w in &words[..D - 1] {
+            h = L::u_add(h, *w);
+        }
+        fmix32::<L>(L::u_xor(h, L::u(keys.finish)))
     }
 
     /// Visits one cell for the lanes in `needs`: `h` is its hash, `shifted`
@@ -609,7 +619,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             let rank = L::select(active, metric.rank::<L, D>(&delta), L::f(f32::INFINITY));
             let id = if IDS {
                 let (am, cm) = p.id;
-                L::u_add(L::u_mul(h, L::u(am)), L::u(cm))
+                // The sentinel state is reported as INVALID_ID − 1
+                // (`definition::feature_id`): an unsigned minimum.
+                L::u_min(L::u_add(L::u_mul(h, L::u(am)), L::u(cm)), L::u(INVALID_ID - 1))
             } else {
                 L::u(0)
             };
@@ -643,10 +655,10 @@ fn logical_block<const D: usize>() -> Vec<[i64; D]> {
     block
 }
 
-/// Per-lane axis terms of the cells at `offset` from `cell`, wrapped into
-/// [0, period) when the pattern is periodic.
+/// Per-lane axis words of axis `axis` of the cells at `offset` from `cell`,
+/// wrapped into [0, period) when the pattern is periodic.
 #[inline(always)]
-fn terms<L: Lanes>(cell: &[i64; 8], offset: i64, period: Option<i64>) -> L::U {
+fn words<L: Lanes>(axis: usize, cell: &[i64; 8], offset: i64, period: Option<i64>) -> L::U {
     let mut t = [0u32; 8];
     for (ti, c) in t.iter_mut().zip(cell).take(L::N) {
         let c = c.wrapping_add(offset);
@@ -655,7 +667,24 @@ fn terms<L: Lanes>(cell: &[i64; 8], offset: i64, period: Option<i64>) -> L::U {
             None => c,
         });
     }
-    L::u_load(&t[..L::N])
+    word::<L>(axis, L::u_load(&t[..L::N]))
+}
+
+/// MurmurHash3's finaliser in lanes ([`definition::fmix32`](crate::definition::fmix32)).
+#[inline(always)]
+fn fmix32<L: Lanes>(mut h: L::U) -> L::U {
+    h = L::u_xor(h, L::u_shr16(h));
+    h = L::u_mul(h, L::u(0x85EB_CA6B));
+    h = L::u_xor(h, L::u_shr13(h));
+    h = L::u_mul(h, L::u(0xC2B2_AE35));
+    L::u_xor(h, L::u_shr16(h))
+}
+
+/// An axis word in lanes ([`axis_word`](crate::definition::axis_word)): the raw axis term `t` mixed on its
+/// own.
+#[inline(always)]
+fn word<L: Lanes>(axis: usize, t: L::U) -> L::U {
+    fmix32::<L>(L::u_xor(t, L::u(AXIS_MUL[axis])))
 }
 
 impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
@@ -699,8 +728,7 @@ fn outside<L: Lanes, const D: usize>(f: &[L::F; D], r: f32) -> L::F {
 fn distance_of_rank<L: Lanes>(metric: Metric, r: L::F) -> L::F {
     match metric {
         Metric::Euclidean => L::sqrt(r),
-        Metric::Manhattan | Metric::Chebyshev => r,
-        Metric::Minkowski(p) => per_lane::<L>(r, |v| v.powf(1.0 / p as f32) * UNIT),
+        Metric::Manhattan | Metric::Chebyshev | Metric::Minkowski(_) => r,
     }
 }
 
@@ -719,15 +747,18 @@ fn mark_invalid<L: Lanes, const D: usize, const N: usize>(best: &mut Best<L, D, 
     }
 }
 
-/// Applies a scalar function to every lane.
+/// Applies a scalar function of D lanes' values to every lane.
 #[inline(always)]
-fn per_lane<L: Lanes>(v: L::F, f: impl Fn(f32) -> f32) -> L::F {
-    let mut a = [0f32; 8];
-    L::f_store(v, &mut a[..L::N]);
-    for x in a.iter_mut().take(L::N) {
-        *x = f(*x);
+fn per_lane<L: Lanes, const D: usize>(v: &[L::F; D], f: impl Fn([f32; D]) -> f32) -> L::F {
+    let mut a = [[0f32; 8]; D];
+    for (lanes, x) in a.iter_mut().zip(v) {
+        L::f_store(*x, &mut lanes[..L::N]);
     }
-    L::f_load(&a[..L::N])
+    let mut out = [0f32; 8];
+    for (i, o) in out.iter_mut().enumerate().take(L::N) {
+        *o = f(std::array::from_fn(|k| a[k][i]));
+    }
+    L::f_load(&out[..L::N])
 }
 
 /// Lane `i` of an 8-lane result.
@@ -739,8 +770,8 @@ pub fn lane<const D: usize, const N: usize>(r: &Features8<D, N>, i: usize) -> Fe
     }
 }
 
-/// A metric in lanes; the rank is the reference's (squared distance, Σ|d|^p,
-/// max |d|): the fold of one term per axis.
+/// A metric in lanes; the rank is the reference's (squared distance for
+/// Euclidean, the distance itself otherwise): the fold of one term per axis.
 pub trait Metric32: Copy {
     /// One axis's term of the rank: x², |x| or |x|^p.
     fn term<L: Lanes>(&self, x: L::F) -> L::F;
@@ -768,9 +799,11 @@ pub struct Manhattan;
 /// Chebyshev in lanes.
 #[derive(Clone, Copy, Debug)]
 pub struct Chebyshev;
-/// Minkowski in lanes (the power is taken per lane).
+/// Minkowski in lanes: the rank is the distance itself, computed per lane in
+/// f64 scaled by the largest component (see [`Metric::rank`]), so that no
+/// power overflows or underflows for any p ≥ 1, and rounded to f32 once.
 #[derive(Clone, Copy, Debug)]
-pub struct Minkowski(pub f32);
+pub struct Minkowski(pub f64);
 
 impl Metric32 for Euclid {
     #[inline(always)]
@@ -818,20 +851,25 @@ impl Metric32 for Chebyshev {
 }
 
 impl Metric32 for Minkowski {
-    // Ranks in cells^p rather than units^p: 2^24p would overflow f32.
     #[inline(always)]
     fn term<L: Lanes>(&self, x: L::F) -> L::F {
-        let p = self.0;
-        per_lane::<L>(x, |x| (x.abs() * (1.0 / UNIT)).powf(p))
+        L::abs(x)
     }
+    /// The Lp length of the pair (a, b), each itself an Lp length of some
+    /// axes, so folding the axes' terms in order gives the vector's length.
     #[inline(always)]
     fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
-        L::add(a, b)
+        let p = self.0;
+        per_lane::<L, 2>(&[a, b], |v| Metric::Minkowski(p).rank(&v.map(f64::from)) as f32)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
+        d
+    }
+    #[inline(always)]
+    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
         let p = self.0;
-        per_lane::<L>(d, |x| (x * (1.0 / UNIT)).powf(p))
+        per_lane::<L, D>(v, |v| Metric::Minkowski(p).rank(&v.map(f64::from)) as f32)
     }
 }
 
