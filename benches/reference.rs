@@ -3,8 +3,8 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
-use worley::harness::sample_point;
 use worley::{Config, Features, Reference};
+use worley_harness::sample_point;
 
 const POINTS: usize = 4096;
 

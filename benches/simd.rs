@@ -6,8 +6,8 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
 use std::time::Duration;
-use worley::harness::sample_point;
 use worley::{Config, Features32, Metric, Outputs, Reference, Simd};
+use worley_harness::sample_point;
 
 const POINTS: usize = 4096;
 

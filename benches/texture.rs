@@ -7,10 +7,10 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
 use std::time::Duration;
-use worley::harness::sample_point;
 use worley::perlin::Perlin;
 use worley::texture::{Combination, Fractal, Texture};
 use worley::{Config, Features32, Outputs, Simd};
+use worley_harness::sample_point;
 
 const POINTS: usize = 4096;
 

@@ -11,9 +11,9 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 use worley::perlin::Perlin;
-use worley::picture::{id_colour, to_byte, write_atomically, Rgb};
 use worley::texture::{bump, Combination, Fractal, Texture};
 use worley::{Config, Outputs, Simd};
+use worley_cli::picture::{id_colour, to_byte, write_output, Rgb};
 
 /// What a ray hit.
 #[derive(Clone, Copy, PartialEq)]
@@ -211,7 +211,7 @@ fn main() -> Result<(), String> {
     if let Some(dir) = std::path::Path::new(&path).parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
-    write_atomically(std::path::Path::new(&path), &image.to_png()?)?;
+    write_output(std::path::Path::new(&path), &image.to_png()?)?;
     println!(
         "rendered {width}x{height} in {elapsed:.2} s on {} threads ({:.2} M pixels/s); wrote {path}",
         rayon::current_num_threads(),

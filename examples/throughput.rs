@@ -8,8 +8,8 @@
 //! plane x₂ = 0.5 beyond 2D). Distances only, λ 5, Euclidean, exact mode.
 
 use std::time::Instant;
-use worley::harness::sample_point;
 use worley::{Config, Features32, Outputs, Simd};
+use worley_harness::sample_point;
 
 const POINTS: usize = 1 << 18;
 

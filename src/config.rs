@@ -22,7 +22,8 @@ pub const DENSITY_RANGE: (f64, f64) = (0.25, 32.0);
 
 /// A distance metric. Every metric measures the distance to the same feature
 /// points; changing the metric changes the distances, never the point set.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Metric {
     /// √(Σ dᵢ²): round cells, smooth F1 inside a cell.
     Euclidean,
@@ -152,7 +153,8 @@ impl fmt::Display for Metric {
 }
 
 /// How far the search goes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Mode {
     /// Search the 3^d block, then widen shell by shell until no unvisited cube
     /// can hold a closer point: F1..Fn are exact for every order, metric and
@@ -185,7 +187,8 @@ impl fmt::Display for Mode {
 /// let f = basis.evaluate([0.5, 1.25, -3.0]);
 /// assert!(f.distance[0] <= f.distance[3]);
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Config {
     /// Any 64-bit seed; every seed gives a different pattern.
     pub seed: u64,

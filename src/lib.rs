@@ -3,33 +3,105 @@
 //! Steven Worley's cellular texture basis: F1..Fn, the distances from a
 //! sample to its n closest feature points, with each point's delta vector
 //! and feature ID, in 2, 3 and 4 dimensions and under the Euclidean,
-//! Manhattan, Chebyshev and Minkowski metrics.
+//! Manhattan, Chebyshev and Minkowski metrics, on Worley's point process (a
+//! Poisson number of points per cell).
 //!
-//! - [`definition`] fixes the point set bit for bit: the cell hash, the LCG,
-//!   the Poisson population table, the fixed-point feature points and the
-//!   scale that makes the mean Euclidean F1 equal to 1.
-//! - [`Reference`] is the f64 reference kernel: plain loops, exact by
-//!   construction (it widens its search until no unvisited cell can hold a
-//!   closer point), written to be read.
-//! - [`Simd`] is the 8-lane f32 kernel on `wide`: the same points, the same
-//!   certified search, one sample or eight per call, bit-identical between
-//!   the two.
-//! - [`harness`] checks any evaluator against a brute-force oracle, for
-//!   continuity across cell boundaries and against the Poisson law, and
-//!   measures its throughput.
+//! # Quick start
 //!
 //! ```
-//! use worley::{Config, Reference};
-//! let basis = Reference::<3>::new(Config { order: 2, ..Config::default() }).unwrap();
+//! use worley::{Config, Outputs, Simd};
+//!
+//! // F1 and F2 with feature IDs in 3D; build once, share between threads.
+//! let basis = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Ids).unwrap();
 //! let f = basis.evaluate([1.0, 2.0, 3.0]);
-//! let (f1, f2) = (f.distance[0], f.distance[1]);
-//! assert!(0.0 <= f1 && f1 <= f2);
+//! let crackle = f.distance[1] - f.distance[0]; // F2 − F1
+//! assert!(crackle >= 0.0 && f.id[0] != worley::INVALID_ID);
 //! ```
+//!
+//! # Choosing an entry point
+//!
+//! Every call below gives the same bits for the same point. `Simd<D, N>`
+//! computes F1..FN in f32 (N is a const generic, so the loops are sized at
+//! compile time); [`Reference`] computes the same function in f64 and is
+//! the one to read or to test against.
+//!
+//! | you have | call | notes |
+//! |---|---|---|
+//! | one point | [`Simd::evaluate`], [`Simd::evaluate_f32`], [`Simd::evaluate_vec3`] (and `vec2`, `vec3a`, `vec4`) | the 1-lane instantiation of the kernel |
+//! | eight points (a ray packet) | [`Simd::evaluate8`], [`Simd::evaluate8_vec3`], [`Simd::evaluate_lanes`] | one `f32x8` per output and axis |
+//! | a slice of points | [`Simd::evaluate_slice`] into your buffer; [`Simd::evaluate_slice_parallel`] on all cores | any [`Point`]: `[f64; D]`, `[f32; D]`, glam vectors |
+//! | a regular grid or image tile | [`Simd::evaluate_grid`], [`Simd::evaluate_grid_parallel`]; [`Grid::fill_by_eights`] for your own shading per eight points | axis 0 fastest |
+//! | a huge world | [`Simd::evaluate_in_cell`], [`Simd::evaluate8_in_cell`], [`Reference::evaluate_in_cell`] | an `i64` cell plus a fraction: no precision lost far from the origin |
+//! | a tileable texture | [`Simd::evaluate_periodic`], [`Simd::evaluate8_periodic`] with a [`Period`] | samples in cells |
+//! | combinations, fractal sums, gradients | [`texture::Texture`] | F2 − F1, Σ gain^i·C(lacunarity^i·x), analytic gradients |
+//! | Perlin noise beside it | [`perlin::Perlin`] | one point or eight |
+//!
+//! [`Outputs`] says whether IDs and deltas are computed at all: asking for
+//! distances only keeps them out of the hot loop.
 //!
 //! # Crate features
-//! - `parallel` (default): the harness runs its oracle, continuity and grid
-//!   campaigns on all cores with rayon. Throughput is always measured on one
-//!   thread.
+//!
+//! - `parallel` (default): [`Simd::evaluate_slice_parallel`],
+//!   [`Simd::evaluate_grid_parallel`] and grids of textures on all cores,
+//!   with rayon. Without it the same calls run on the calling thread (the
+//!   `_parallel` variants are not compiled).
+//! - `serde`: `Serialize`/`Deserialize` for [`Config`], [`Metric`], [`Mode`]
+//!   and [`texture::Range`].
+//!
+//! The crate's only other dependencies are `glam` (vector types in the API)
+//! and `wide` (the lanes).
+//!
+//! # Which SIMD level runs
+//!
+//! `wide` fixes its instructions when it is compiled: build with
+//! `RUSTFLAGS="-C target-cpu=native"` (or `x86-64-v3`) for AVX2. A build
+//! without target flags on x86_64 still runs the Euclidean 8-lane kernels
+//! recompiled for AVX2 when the CPU has it ([`simd::runtime_avx2`]).
+//! [`simd_level`] says which path a call takes:
+//!
+//! ```
+//! println!("worley runs {}", worley::simd_level());
+//! ```
+//!
+//! # Guarantees, and the test that enforces each
+//!
+//! - **Exact search** ([`Mode::Exact`], the default): the search widens
+//!   until no unvisited cell can hold a closer point, so F_k is the true
+//!   k-th distance of the point set for every order, metric and dimension
+//!   (`tests/oracle.rs`: 0 wrong on 10^6 random points per dimension against
+//!   brute force; `tests/simd.rs` and the fuzz targets for continuity).
+//!   [`Mode::Window`] is Worley's 3^d search, faster and sometimes wrong.
+//! - **Error bound**: the f64 reference is within a few ulps; the f32
+//!   kernel within 4·ε_f32·(F + 1/S) of it (S = [`Pattern::scale`]), however
+//!   far the sample is from the origin, for every Minkowski exponent
+//!   (`tests/simd.rs`, `tests/hard_cases.rs`, `tests/minkowski.rs`, the
+//!   `differential` fuzz target).
+//! - **Bit identity**: one point gives the same bits through every entry
+//!   point, lane, batch and thread count, and in a default and an AVX2
+//!   build (`tests/simd.rs`, run by CI in both builds; a unit test holds the
+//!   runtime-AVX2 copy equal to the SSE2 code).
+//! - **Bad input** (NaN, ±∞, |x·S| > 2^53) gives NaN distances and deltas
+//!   and [`INVALID_ID`], never a panic; no real feature point carries
+//!   [`INVALID_ID`] (`tests/sentinel_id.rs`, the `bad_input` fuzz target).
+//!   An invalid [`Config`] is a [`ConfigError`] at construction.
+//! - **The point set** is fixed bit for bit by [`definition`]: a second
+//!   implementation that follows its text reproduces every point (a unit
+//!   test re-derives a cell by hand), and it has the Poisson statistics and
+//!   no repeated strips of cells (`tests/statistics.rs`,
+//!   `tests/cell_hash.rs`).
+//!
+//! # Modules
+//! - [`definition`] fixes the point set: the cell hash, the LCG, the Poisson
+//!   population table, the fixed-point feature points and the scale that
+//!   makes the mean Euclidean F1 equal to 1.
+//! - [`reference`](mod@reference): the f64 kernel, plain loops written to be read.
+//! - [`simd`]: the 8-lane f32 kernel on `wide` and its batch APIs.
+//! - [`texture`], [`perlin`]: combinations, fractal sums, gradients, bump;
+//!   Perlin noise.
+//!
+//! The harness that checks all of this against a brute-force oracle is the
+//! `worley-harness` crate beside this one; the `worley` command is
+//! `worley-cli`.
 // One fenced exception: the call into the AVX2 copy of the 8-lane kernel
 // after the CPU check (`simd::runtime_avx2`).
 #![deny(unsafe_code)]
@@ -37,12 +109,9 @@
 
 pub mod config;
 pub mod definition;
-pub mod harness;
 pub mod math;
 pub mod perlin;
-pub mod picture;
 pub mod reference;
-pub mod render;
 pub mod simd;
 pub mod texture;
 
@@ -50,3 +119,20 @@ pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Features, Reference};
 pub use simd::{simd_level, Features32, Features8, Grid, Outputs, Period, PeriodError, Point, Simd, SizeError};
+
+// The README's and the documentation pages' Rust blocks run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+#[cfg(doctest)]
+#[doc = include_str!("../docs/simd.md")]
+struct SimdPageDoctests;
+#[cfg(doctest)]
+#[doc = include_str!("../docs/tools.md")]
+struct ToolsPageDoctests;
+#[cfg(doctest)]
+#[doc = include_str!("../docs/accuracy.md")]
+struct AccuracyPageDoctests;
+#[cfg(doctest)]
+#[doc = include_str!("../docs/definition.md")]
+struct DefinitionPageDoctests;

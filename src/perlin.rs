@@ -30,6 +30,12 @@ impl Perlin {
     }
 
     /// Noise at one point.
+    ///
+    /// ```
+    /// let perlin = worley::perlin::Perlin::new(7);
+    /// assert_eq!(perlin.noise([1.0, 2.0, 3.0]), 0.0); // zero on the lattice
+    /// assert!(perlin.noise([1.5, 2.25, 3.125]).abs() <= 1.0);
+    /// ```
     pub fn noise(&self, x: [f64; 3]) -> f32 {
         let mut out = [0f32; 1];
         One::f_store(self.lanes::<One>(&[x]), &mut out);
@@ -37,6 +43,12 @@ impl Perlin {
     }
 
     /// Noise at eight points, one per lane.
+    ///
+    /// ```
+    /// let perlin = worley::perlin::Perlin::new(7);
+    /// let points: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64 * 0.37, 0.5, 0.25]);
+    /// assert_eq!(perlin.noise8(&points).to_array()[6], perlin.noise(points[6]));
+    /// ```
     pub fn noise8(&self, x: &[[f64; 3]; 8]) -> f32x8 {
         self.lanes::<Eight>(x)
     }

@@ -95,6 +95,13 @@ impl<const D: usize> Reference<D> {
     ///
     /// # Errors
     /// The first invalid field of `config`.
+    ///
+    /// ```
+    /// use worley::{Config, Metric, Reference};
+    /// let basis = Reference::<3>::new(Config { order: 4, metric: Metric::Minkowski(3.0), ..Config::default() }).unwrap();
+    /// assert_eq!(basis.config().order, 4);
+    /// assert!(Reference::<3>::new(Config { order: 0, ..Config::default() }).is_err());
+    /// ```
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         let pattern = Pattern::new(&config)?;
         let mut neighbours = shell(1);
@@ -113,6 +120,14 @@ impl<const D: usize> Reference<D> {
     }
 
     /// F1..Fn, deltas and IDs at `x` (user units).
+    ///
+    /// ```
+    /// use worley::{Config, Reference};
+    /// let basis = Reference::<2>::new(Config { order: 3, ..Config::default() }).unwrap();
+    /// let f = basis.evaluate([10.5, -3.25]);
+    /// assert!(f.distances().windows(2).all(|w| w[0] <= w[1]));
+    /// assert!(f.shells >= 1); // the 3^d block, or more when the search widened
+    /// ```
     pub fn evaluate(&self, x: [f64; D]) -> Features<D> {
         match self.pattern.locate(x) {
             Some((cell, f)) => self.evaluate_in_cell(cell, f),
@@ -126,6 +141,15 @@ impl<const D: usize> Reference<D> {
     ///
     /// A fraction outside [0, 1] (or NaN) or a cell beyond
     /// ±[`MAX_CELL_COORD`] gives the invalid result.
+    ///
+    /// ```
+    /// use worley::{Config, Reference};
+    /// let basis = Reference::<3>::new(Config::default()).unwrap();
+    /// // The same sample, given in user units and as a cell plus a fraction.
+    /// let x = [2.0, -1.0, 0.5];
+    /// let (cell, fraction) = basis.pattern().locate(x).unwrap();
+    /// assert_eq!(basis.evaluate(x).distance[0], basis.evaluate_in_cell(cell, fraction).distance[0]);
+    /// ```
     pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f64; D]) -> Features<D> {
         let order = self.config.order;
         let metric = self.config.metric;

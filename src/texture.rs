@@ -284,7 +284,8 @@ pub struct Gradient8<const D: usize> {
 }
 
 /// An empirical output range: the remap to [0, 1] the chapter recommends.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Range {
     /// The 0.1 % quantile.
     pub lo: f32,
@@ -322,6 +323,17 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     ///
     /// # Errors
     /// The first invalid parameter, with what is accepted.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Config;
+    /// // Three octaves of F2 − F1 in 3D.
+    /// let crackle: Combination = "F2-F1".parse().unwrap();
+    /// let t = Texture::<3, 2>::new(Config::default(), crackle, Fractal::octaves(3), None).unwrap();
+    /// assert!(t.value([0.5, 1.5, -2.0]) >= 0.0);
+    /// // A combination that needs F3 cannot be built on F1..F2.
+    /// assert!(Texture::<3, 2>::new(Config::default(), "F3-F1".parse().unwrap(), Fractal::default(), None).is_err());
+    /// ```
     pub fn new(
         config: Config,
         combination: Combination,
@@ -380,6 +392,13 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     }
 
     /// Eight values.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::default(), None).unwrap();
+    /// let points: [[f64; 2]; 8] = std::array::from_fn(|i| [i as f64 * 0.3, 1.0]);
+    /// assert_eq!(t.value8(&points).to_array()[4], t.value(points[4]));
+    /// ```
     pub fn value8(&self, x: &[[f64; D]; 8]) -> f32x8 {
         let mut sum = f32x8::splat(0.0);
         for (i, &(frequency, amplitude, period)) in self.octaves.iter().enumerate() {
@@ -391,6 +410,13 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     }
 
     /// One value (lane 0 of [`Texture::value8`]).
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<3, 1>::new(worley::Config::default(), Combination::f(1), Fractal::default(), None).unwrap();
+    /// let f1 = worley::Simd::<3, 1>::new(worley::Config::default(), worley::Outputs::Distances).unwrap();
+    /// assert_eq!(t.value([1.0, 2.0, 3.0]), f1.evaluate([1.0, 2.0, 3.0]).distance[0]);
+    /// ```
     pub fn value(&self, x: [f64; D]) -> f32 {
         self.value8(&[x; 8]).to_array()[0]
     }
@@ -425,6 +451,14 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     }
 
     /// One value and its gradient (lane 0 of [`Texture::gradient8`]).
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::default(), None).unwrap();
+    /// let (sample, g) = t.gradient([0.3, 0.7]);
+    /// // The Euclidean F1 has a unit gradient wherever it is defined.
+    /// assert!(!sample.defined || ((g[0] * g[0] + g[1] * g[1]).sqrt() - 1.0).abs() < 1e-5);
+    /// ```
     pub fn gradient(&self, x: [f64; D]) -> (Sample, [f32; D]) {
         let g = self.gradient8(&[x; 8]);
         let sample = Sample { value: g.value.to_array()[0], defined: g.defined[0] };
@@ -435,6 +469,15 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     ///
     /// # Errors
     /// [`crate::SizeError`] if `out` is shorter than `xs`; nothing is written.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<3, 2>::new(worley::Config::default(), Combination::crackle(), Fractal::default(), None).unwrap();
+    /// let points: Vec<[f32; 3]> = (0..50).map(|i| [i as f32 * 0.2, 0.0, 0.0]).collect();
+    /// let mut out = vec![0.0; 50];
+    /// t.values(&points, &mut out).unwrap();
+    /// assert_eq!(out[17], t.value([17.0f32 * 0.2, 0.0, 0.0].map(f64::from)));
+    /// ```
     pub fn values<P: Point<D>>(&self, xs: &[P], out: &mut [f32]) -> Result<(), crate::SizeError> {
         if out.len() < xs.len() {
             return Err(crate::SizeError { needed: xs.len(), given: out.len() });
@@ -455,13 +498,18 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     ///
     /// # Errors
     /// [`crate::SizeError`] if `out.len() != grid.len()`.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Grid;
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::octaves(2), None).unwrap();
+    /// let grid = Grid { origin: [0.0, 0.0], step: [0.1, 0.1], size: [32, 16] };
+    /// let mut image = vec![0.0; 32 * 16];
+    /// t.values_grid(&grid, &mut image).unwrap();
+    /// assert_eq!(image[32 + 3], t.value(grid.point(32 + 3)));
+    /// ```
     pub fn values_grid(&self, grid: &crate::Grid<D>, out: &mut [f32]) -> Result<(), crate::SizeError> {
-        let needed = grid.len().ok_or(crate::SizeError { needed: usize::MAX, given: out.len() })?;
-        if out.len() != needed {
-            return Err(crate::SizeError { needed, given: out.len() });
-        }
-        grid.fill_by_eights(out, |block| self.value8(block).to_array());
-        Ok(())
+        grid.fill_by_eights(out, |block| self.value8(block).to_array())
     }
 
     /// The range of values over `samples` random points (uniform in
@@ -474,7 +522,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         };
         let offset = if self.period.is_some() { 0.0 } else { -1000.0 };
         let points: Vec<[f64; D]> = (0..samples)
-            .map(|i| std::array::from_fn(|a| offset + extent[a] * crate::harness::uniform(seed, (i * D + a) as u64)))
+            .map(|i| std::array::from_fn(|a| offset + extent[a] * uniform(seed, (i * D + a) as u64)))
             .collect();
         let mut v = vec![0f32; samples];
         self.values(&points, &mut v).expect("buffer sized to the points");
@@ -664,4 +712,11 @@ pub fn default_range(dim: usize, combination: &Combination) -> Option<Range> {
         .iter()
         .find(|(d, n, _, _)| *d == dim && n.parse::<Combination>().as_ref() == Ok(combination))
         .map(|&(_, _, lo, hi)| Range { lo, hi })
+}
+
+/// A uniform f64 in [0, 1) from a seed and a counter (SplitMix64 twice),
+/// for the sample points of [`Texture::measure_range`].
+fn uniform(seed: u64, counter: u64) -> f64 {
+    use crate::definition::splitmix64;
+    (splitmix64(seed ^ splitmix64(counter)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }

@@ -4,7 +4,7 @@
 //! whose axis terms enter the chain unmixed, as the crate's did before.
 
 use worley::definition::{axis_term, cell_hash, fmix32, SeedKeys, AXIS_MUL};
-use worley::harness::repeats::{repeated_runs, Repeats};
+use worley_harness::repeats::{repeated_runs, Repeats};
 
 /// About 4·10^6 cells per dimension.
 fn side(dim: usize) -> i64 {

@@ -4,7 +4,7 @@
 //! line in hex; then a few thousand seeded random byte strings.
 
 use std::path::Path;
-use worley::harness::fuzz;
+use worley_harness::fuzz;
 
 type Check = fn(&[u8]);
 

@@ -4,9 +4,9 @@
 //! compared with the brute-force oracle, and with the result one ulp away
 //! for continuity.
 
-use worley::harness::oracle::{brute_force, brute_force_in_cell};
-use worley::harness::{first_in_cell, lattice_coordinate};
 use worley::{Config, Features, Metric, Reference, INVALID_ID};
+use worley_harness::oracle::{brute_force, brute_force_in_cell};
+use worley_harness::{first_in_cell, lattice_coordinate};
 
 /// A hard coordinate value in user units, derived from the scale S.
 struct Case {

@@ -4,8 +4,8 @@
 //! feature point of the 7^d block around the sample, sorted. It shares only
 //! the point set (`Pattern::for_each_point`) with the kernels.
 
-use worley::harness::sample_point;
 use worley::{Config, Grid, Metric, Outputs, Reference, Simd};
+use worley_harness::sample_point;
 
 const EXPONENTS: [f64; 10] = [1.0, 1.5, 2.0, 3.0, 8.0, 30.0, 100.0, 400.0, 1000.0, 1e6];
 

@@ -2,8 +2,8 @@
 //! points per dimension in exact mode, plus every metric and the window
 //! mode's known failure.
 
-use worley::harness::{self, Campaign, Report};
 use worley::{Config, Metric, Mode, Reference};
+use worley_harness::{self as harness, Campaign, Report};
 
 fn campaign(oracle_samples: usize, pairs: usize) -> Campaign {
     Campaign { seed: 11, samples: 0, oracle_samples, range: 1000.0, pairs, grid_cells: 0 }

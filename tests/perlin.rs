@@ -2,8 +2,8 @@
 //! transcription of its definition, zero on the lattice, bounded, Lipschitz,
 //! and NaN for bad input.
 
-use worley::harness::uniform;
 use worley::perlin::Perlin;
+use worley_harness::uniform;
 
 /// The definition, written out in f64 with no lanes: the lattice hash of
 /// `perlin.rs` (seed, three multiply/xor-shift rounds, a finaliser), the top

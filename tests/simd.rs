@@ -1,9 +1,9 @@
 //! The 8-lane kernel: the same function as the reference (through the shared
 //! harness), one lane and eight lanes bit-identical, bad lanes isolated.
 
-use worley::harness::{self, sample_point, Campaign, Report};
 use worley::simd::lane;
 use worley::{Config, Features32, Metric, Mode, Outputs, Simd, INVALID_ID};
+use worley_harness::{self as harness, sample_point, Campaign, Report};
 
 fn check<const D: usize, const N: usize>(config: Config, samples: usize) -> Report {
     let kernel = Simd::<D, N>::new(config, Outputs::IdsAndDeltas).unwrap();

@@ -5,8 +5,8 @@
 //! a well-mixed Poisson process gives a KS distance of about 0.001, bound
 //! 0.005; the grid bias's standard error is about 0.05 %, bound 0.3 %.
 
-use worley::harness::{self, Campaign, Report};
 use worley::{Config, Metric, Reference};
+use worley_harness::{self as harness, Campaign, Report};
 
 fn stats<const D: usize>(config: Config) -> Report {
     let campaign =

@@ -4,9 +4,9 @@
 //! differences, and rejected parameters.
 
 use worley::definition::FRACTION_ULP;
-use worley::harness::uniform;
 use worley::texture::{bump, Combination, Fractal, Texture, TextureError};
 use worley::{Config, Metric, Outputs, Period, Simd};
+use worley_harness::uniform;
 
 /// Brute force over the periodic point set: every point of every cell of
 /// one period, repeated at shifts −2..=2 periods per axis (enough for the
@@ -322,7 +322,7 @@ fn tabulated_ranges_match_a_fresh_measurement() {
     // binomial with p = 0.001, σ = √(p(1 − p)/n) ≈ 7.1e-5; allow 5σ.
     fn shares<const D: usize>(c: &Combination, lo: f32, hi: f32) -> (f64, f64) {
         let t = Texture::<D, 4>::new(Config::default(), c.clone(), Fractal::default(), None).unwrap();
-        let points: Vec<[f64; D]> = (0..SAMPLES).map(|i| worley::harness::sample_point(99, i, 1000.0)).collect();
+        let points: Vec<[f64; D]> = (0..SAMPLES).map(|i| worley_harness::sample_point(99, i, 1000.0)).collect();
         let mut v = vec![0f32; SAMPLES];
         t.values(&points, &mut v).unwrap();
         let below = v.iter().filter(|&&x| x < lo).count() as f64 / SAMPLES as f64;

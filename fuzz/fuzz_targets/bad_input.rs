@@ -1,6 +1,6 @@
-//! See [`worley::harness::fuzz::bad_input`] for what this target decodes and asserts.
+//! See [`worley_harness::fuzz::bad_input`] for what this target decodes and asserts.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| worley::harness::fuzz::bad_input(data));
+fuzz_target!(|data: &[u8]| worley_harness::fuzz::bad_input(data));

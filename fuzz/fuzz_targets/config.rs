@@ -1,6 +1,6 @@
-//! See [`worley::harness::fuzz::config`] for what this target decodes and asserts.
+//! See [`worley_harness::fuzz::config`] for what this target decodes and asserts.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| worley::harness::fuzz::config(data));
+fuzz_target!(|data: &[u8]| worley_harness::fuzz::config(data));

@@ -21,7 +21,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
-use worley::harness::sample_point;
+use worley_harness::sample_point;
 use worley::{Config, Features32, Outputs, Simd};
 
 const RANDOM: usize = 1 << 18;

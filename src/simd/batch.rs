@@ -64,10 +64,36 @@ impl<const D: usize> Grid<D> {
         self.size.contains(&0)
     }
 
-    /// Fills `out` (one value per point, axis 0 fastest) eight points at a
-    /// time, in tiles of [`TILE`] on all cores with the `parallel` feature;
-    /// a tile's last block of fewer than eight repeats its last point.
-    pub(crate) fn fill_by_eights<T: Copy + Send>(&self, out: &mut [T], f: impl Fn(&[[f64; D]; 8]) -> [T; 8] + Sync) {
+    /// Fills `out` with one value per point (axis 0 fastest) from `f`,
+    /// which gets eight points at a time: the shape of a renderer's shading
+    /// loop over an image tile. Tiles of [`TILE`] points run on all cores
+    /// with the `parallel` feature; a tile's last block of fewer than eight
+    /// repeats its last point.
+    ///
+    /// ```
+    /// use worley::{Config, Grid, Outputs, Simd};
+    /// let basis = Simd::<2, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
+    /// let grid = Grid { origin: [0.0, 0.0], step: [0.1, 0.1], size: [64, 48] };
+    /// let mut crackle = vec![0f32; 64 * 48];
+    /// grid.fill_by_eights(&mut crackle, |points| {
+    ///     let f = basis.evaluate8(points);
+    ///     (f.distance[1] - f.distance[0]).to_array()
+    /// })
+    /// .unwrap();
+    /// assert!(crackle.iter().all(|v| *v >= 0.0));
+    /// ```
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out.len() != self.len()`; nothing is written.
+    pub fn fill_by_eights<T: Copy + Send>(
+        &self,
+        out: &mut [T],
+        f: impl Fn(&[[f64; D]; 8]) -> [T; 8] + Sync,
+    ) -> Result<(), SizeError> {
+        let needed = self.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(SizeError { needed, given: out.len() });
+        }
         let tile = |(t, dst): (usize, &mut [T])| {
             for (c, d8) in dst.chunks_mut(8).enumerate() {
                 let start = t * TILE + c * 8;
@@ -82,6 +108,7 @@ impl<const D: usize> Grid<D> {
         }
         #[cfg(not(feature = "parallel"))]
         out.chunks_mut(TILE).enumerate().for_each(tile);
+        Ok(())
     }
 
     /// The position of the point with linear index `index` (axis 0 fastest).
@@ -121,6 +148,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     ///
     /// # Errors
     /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+    ///
+    /// ```
+    /// use worley::{Config, Features32, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let points: Vec<glam::Vec3> = (0..100).map(|i| glam::Vec3::new(i as f32 * 0.1, 0.0, 1.0)).collect();
+    /// let mut out = vec![Features32 { distance: [0.0; 1], delta: [[0.0; 3]; 1], id: [0; 1] }; points.len()];
+    /// basis.evaluate_slice(&points, &mut out).unwrap();
+    /// assert_eq!(out[42].distance, basis.evaluate_vec3(points[42]).distance);
+    /// ```
     pub fn evaluate_slice<P: Point<D>>(&self, xs: &[P], out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
         if out.len() < xs.len() {
             return Err(SizeError { needed: xs.len(), given: out.len() });
@@ -140,6 +176,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     ///
     /// # Errors
     /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let points: Vec<[f64; 2]> = (0..10_000).map(|i| [i as f64 * 0.01, 3.0]).collect();
+    /// let mut out = vec![basis.evaluate([0.0, 0.0]); points.len()];
+    /// basis.evaluate_slice_parallel(&points, &mut out).unwrap();
+    /// assert_eq!(out[9_999].distance, basis.evaluate(points[9_999]).distance);
+    /// ```
     #[cfg(feature = "parallel")]
     pub fn evaluate_slice_parallel<P: Point<D> + Sync>(
         &self,
@@ -162,6 +207,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// # Errors
     /// [`SizeError`] if `out.len() != grid.len()` (or the grid's size
     /// overflows); nothing is written.
+    ///
+    /// ```
+    /// use worley::{Config, Grid, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let tile = Grid { origin: [0.0, 0.0, 0.5], step: [0.125, 0.125, 1.0], size: [64, 32, 1] };
+    /// let mut out = vec![basis.evaluate([0.0; 3]); tile.len().unwrap()];
+    /// basis.evaluate_grid(&tile, &mut out).unwrap();
+    /// // Point (i, j) is at origin + step · (i, j), axis 0 fastest.
+    /// assert_eq!(out[64 * 3 + 5].distance, basis.evaluate([5.0 * 0.125, 3.0 * 0.125, 0.5]).distance);
+    /// ```
     pub fn evaluate_grid(&self, grid: &Grid<D>, out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
         let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
         if out.len() != needed {
@@ -176,6 +231,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     ///
     /// # Errors
     /// As [`Simd::evaluate_grid`].
+    ///
+    /// ```
+    /// use worley::{Config, Grid, Outputs, Simd};
+    /// let basis = Simd::<2, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Ids).unwrap();
+    /// let image = Grid { origin: [0.0, 0.0], step: [0.05, 0.05], size: [256, 128] };
+    /// let (mut serial, mut parallel) = (vec![basis.evaluate([0.0; 2]); 256 * 128], vec![basis.evaluate([0.0; 2]); 256 * 128]);
+    /// basis.evaluate_grid(&image, &mut serial).unwrap();
+    /// basis.evaluate_grid_parallel(&image, &mut parallel).unwrap();
+    /// assert_eq!(serial, parallel);
+    /// ```
     #[cfg(feature = "parallel")]
     pub fn evaluate_grid_parallel(&self, grid: &Grid<D>, out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
         use rayon::prelude::*;
@@ -224,6 +289,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// A fraction outside [0, 1] (or not finite) or a cell beyond
     /// ±[`MAX_CELL_COORD`] gives the invalid result (NaN distances,
     /// [`INVALID_ID`](crate::INVALID_ID)), as in the reference.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// // A sample 2^40 cells from the origin, with the full f32 fraction.
+    /// let f = basis.evaluate_in_cell([1 << 40, -7, 3], [0.25, 0.5, 0.125]);
+    /// assert!(f.distance[0] > 0.0 && f.distance[0] < 4.0);
+    /// // A fraction outside [0, 1] is bad input.
+    /// assert!(basis.evaluate_in_cell([0; 3], [1.5, 0.0, 0.0]).distance[0].is_nan());
+    /// ```
     pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f32; D]) -> Features32<D, N> {
         let located = in_cell::<One, D>(&[cell], &[fraction]);
         let best = self.dispatch::<One>(&located);
@@ -231,6 +306,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// Eight samples given as cells and fractions ([`Simd::evaluate_in_cell`]).
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let cells: [[i64; 2]; 8] = std::array::from_fn(|i| [i as i64 * 1_000_000_007, 5]);
+    /// let f = basis.evaluate8_in_cell(&cells, &[[0.5, 0.5]; 8]);
+    /// assert_eq!(f.distance[0].to_array()[6], basis.evaluate_in_cell(cells[6], [0.5, 0.5]).distance[0]);
+    /// ```
     pub fn evaluate8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8]) -> super::Features8<D, N> {
         let located = in_cell::<Eight, D>(cells, fractions);
         let best = self.dispatch8(&located);

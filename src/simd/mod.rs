@@ -253,6 +253,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     ///
     /// # Errors
     /// The first invalid field of `config`, or an order that differs from `N`.
+    ///
+    /// ```
+    /// use worley::{Config, ConfigError, Outputs, Simd};
+    /// let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert_eq!(f1.outputs(), Outputs::Distances);
+    /// // The order is a const generic: a config asking for another is an error.
+    /// let wrong = Simd::<3, 1>::new(Config { order: 2, ..Config::default() }, Outputs::Ids);
+    /// assert!(matches!(wrong, Err(ConfigError::OrderMismatch { asked: 2, compiled: 1 })));
+    /// ```
     pub fn new(config: Config, outputs: Outputs) -> Result<Self, ConfigError> {
         if config.order != N {
             return Err(ConfigError::OrderMismatch { asked: config.order, compiled: N });
@@ -296,6 +305,18 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// One sample (the 1-lane instantiation of the kernel).
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    /// let f = basis.evaluate([0.3, -1.7]);
+    /// assert!(f.distance[0] <= f.distance[1]);
+    /// // The delta's length is F1.
+    /// let [dx, dy] = f.delta[0];
+    /// assert!(((dx * dx + dy * dy).sqrt() - f.distance[0]).abs() < 1e-6);
+    /// // Bad input: NaN distances and the invalid ID.
+    /// assert!(basis.evaluate([f64::NAN, 0.0]).distance[0].is_nan());
+    /// ```
     pub fn evaluate(&self, x: [f64; D]) -> Features32<D, N> {
         let located = self.locate::<One>(&[x]);
         let best = self.dispatch::<One>(&located);
@@ -303,11 +324,26 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// One sample given in f32.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert_eq!(basis.evaluate_f32([1.5, 2.0, 0.25]).distance, basis.evaluate([1.5, 2.0, 0.25]).distance);
+    /// ```
     pub fn evaluate_f32(&self, x: [f32; D]) -> Features32<D, N> {
         self.evaluate(x.map(f64::from))
     }
 
     /// Eight samples, one per lane (the 8-lane instantiation).
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Ids).unwrap();
+    /// let points: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64, 0.5, -2.0]);
+    /// let f = basis.evaluate8(&points);
+    /// // Lane i is bit for bit the single-point result.
+    /// assert_eq!(f.distance[0].to_array()[3].to_bits(), basis.evaluate(points[3]).distance[0].to_bits());
+    /// ```
     pub fn evaluate8(&self, x: &[[f64; D]; 8]) -> Features8<D, N> {
         let located = self.locate::<Eight>(x);
         let best = self.dispatch8(&located);
@@ -341,6 +377,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// Eight samples as lanes per axis.
+    ///
+    /// ```
+    /// use wide::f32x8;
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let x = f32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    /// let f = basis.evaluate_lanes([x, f32x8::splat(0.5)]);
+    /// assert_eq!(f.distance[0].to_array()[2], basis.evaluate_f32([2.0, 0.5]).distance[0]);
+    /// ```
     pub fn evaluate_lanes(&self, x: [f32x8; D]) -> Features8<D, N> {
         let arrays = x.map(|v| v.to_array());
         let points: [[f64; D]; 8] = std::array::from_fn(|i| std::array::from_fn(|a| arrays[a][i] as f64));
@@ -875,6 +920,12 @@ impl Metric32 for Minkowski {
 
 impl<const N: usize> Simd<2, N> {
     /// One point given as a `glam::Vec2`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.evaluate_vec2(glam::Vec2::new(0.5, 0.25)).distance[0] >= 0.0);
+    /// ```
     pub fn evaluate_vec2(&self, p: glam::Vec2) -> Features32<2, N> {
         self.evaluate_f32(p.to_array())
     }
@@ -882,16 +933,37 @@ impl<const N: usize> Simd<2, N> {
 
 impl<const N: usize> Simd<3, N> {
     /// One point given as a `glam::Vec3`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let p = glam::Vec3::new(0.5, 0.25, 4.0);
+    /// assert_eq!(basis.evaluate_vec3(p).distance, basis.evaluate_vec3a(p.into()).distance);
+    /// ```
     pub fn evaluate_vec3(&self, p: glam::Vec3) -> Features32<3, N> {
         self.evaluate_f32(p.to_array())
     }
 
     /// One point given as a `glam::Vec3A`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.evaluate_vec3a(glam::Vec3A::new(1.0, 2.0, 3.0)).distance[0] >= 0.0);
+    /// ```
     pub fn evaluate_vec3a(&self, p: glam::Vec3A) -> Features32<3, N> {
         self.evaluate_f32(p.to_array())
     }
 
     /// Eight points given as `glam::Vec3`s.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let points: [glam::Vec3; 8] = std::array::from_fn(|i| glam::Vec3::new(i as f32 * 0.25, 1.0, 2.0));
+    /// let f = basis.evaluate8_vec3(&points);
+    /// assert_eq!(f.distance[0].to_array()[5], basis.evaluate_vec3(points[5]).distance[0]);
+    /// ```
     pub fn evaluate8_vec3(&self, p: &[glam::Vec3; 8]) -> Features8<3, N> {
         self.evaluate8(&p.map(|v| v.to_array().map(f64::from)))
     }
@@ -899,6 +971,12 @@ impl<const N: usize> Simd<3, N> {
 
 impl<const N: usize> Simd<4, N> {
     /// One point given as a `glam::Vec4`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<4, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.evaluate_vec4(glam::Vec4::new(0.5, 0.25, 4.0, -1.0)).distance[0] >= 0.0);
+    /// ```
     pub fn evaluate_vec4(&self, p: glam::Vec4) -> Features32<4, N> {
         self.evaluate_f32(p.to_array())
     }
@@ -911,7 +989,15 @@ impl<const N: usize> Simd<4, N> {
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 mod runtime_avx2_tests {
     use super::*;
-    use crate::harness::sample_point;
+    use crate::definition::splitmix64;
+
+    /// Point i of a seeded set, uniform in [−range, range]^D.
+    fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
+        std::array::from_fn(|a| {
+            let u = (splitmix64(seed ^ splitmix64((i * D + a) as u64)) >> 11) as f64 / (1u64 << 53) as f64;
+            (2.0 * u - 1.0) * range
+        })
+    }
 
     fn same<const D: usize, const N: usize>(config: Config) {
         if !runtime_avx2() {

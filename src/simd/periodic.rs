@@ -65,6 +65,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// One sample of the periodic pattern, `x` in cells. A non-finite
     /// coordinate gives the invalid result (NaN distances,
     /// [`INVALID_ID`](crate::INVALID_ID)).
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Period, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Ids).unwrap();
+    /// let period = Period::new([8, 8]).unwrap();
+    /// let (a, b) = (basis.evaluate_periodic([1.25, 3.5], &period), basis.evaluate_periodic([9.25, -4.5], &period));
+    /// assert_eq!((a.distance, a.id), (b.distance, b.id)); // one period apart
+    /// ```
     pub fn evaluate_periodic(&self, x: [f64; D], period: &Period<D>) -> Features32<D, N> {
         let located = wrap::<One, D>(&[x], period);
         let best = self.dispatch::<One>(&located);
@@ -73,6 +81,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 
     /// Eight samples of the periodic pattern, `x` in cells; lane `i` is
     /// bit-identical to [`Simd::evaluate_periodic`] of `x[i]`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Period, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let period = Period::new([4, 4, 4]).unwrap();
+    /// let points: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64 * 0.5, 1.0, 2.0]);
+    /// let f = basis.evaluate8_periodic(&points, &period);
+    /// assert_eq!(f.distance[0].to_array()[1], basis.evaluate_periodic(points[1], &period).distance[0]);
+    /// ```
     pub fn evaluate8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>) -> Features8<D, N> {
         let located = wrap::<Eight, D>(x, period);
         let best = self.dispatch8(&located);

@@ -5,10 +5,10 @@
 //! break a documented promise. Short inputs are padded with zeros, so every
 //! byte string is a valid input.
 
-use crate::config::{Config, Metric, Mode, MAX_ORDER};
-use crate::definition::{INVALID_ID, MAX_CELL_COORD};
-use crate::reference::{Features, Reference};
-use crate::simd::{lane, Features32, Grid, Outputs, Simd};
+use worley::config::{Config, Metric, Mode, MAX_ORDER};
+use worley::definition::{INVALID_ID, MAX_CELL_COORD};
+use worley::reference::{Features, Reference};
+use worley::simd::{lane, Features32, Grid, Outputs, Simd};
 
 /// Reads bytes as little-endian words, zero past the end.
 struct Bytes<'a> {

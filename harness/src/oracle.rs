@@ -7,9 +7,9 @@
 //! if it is no farther than the outside of that block; otherwise it starts
 //! again with R + 1.
 
-use crate::config::Metric;
-use crate::definition::Pattern;
-use crate::reference::{Features, MAX_SHELLS};
+use worley::config::Metric;
+use worley::definition::Pattern;
+use worley::reference::{Features, MAX_SHELLS};
 
 /// One candidate: rank, delta in cell units, ID.
 pub type Candidate<const D: usize> = (f64, [f64; D], u32);

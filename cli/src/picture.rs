@@ -1,5 +1,6 @@
 //! Images: colour maps, PNG for looking at, PFM for renderers (the raw f32
-//! values), and writes that never leave a partial file behind.
+//! values), and writes that never leave a partial file behind and go where
+//! the user pointed ([`write_output`]).
 
 use std::io::Write;
 use std::path::Path;
@@ -172,13 +173,63 @@ pub fn from_pfm(bytes: &[u8]) -> Result<(usize, usize, Vec<f32>), String> {
     Ok((w, h, top_first))
 }
 
-/// Writes `bytes` to a temporary file in the same folder, then renames it
-/// over `path`, so that a failure leaves no partial file.
+/// Writes `bytes` where a user who typed `path` expects them:
+///
+/// - `-` is standard output;
+/// - a symbolic link is followed (through chains of links, relative targets
+///   resolved against the link's folder), so the link stays a link and its
+///   target gets the bytes;
+/// - a path that exists and is not a regular file (a FIFO, a device, a
+///   socket) is opened and written directly, and its errors are reported
+///   (`/dev/full` fails with "No space left on device");
+/// - anything else (a regular file, or a new name) gets a temporary file in
+///   the same folder, renamed over it, so that a failure leaves no partial
+///   file and readers never see half an image.
 ///
 /// # Errors
 /// A message naming the path and the cause.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let name = path.file_name().ok_or_else(|| format!("cannot write {}: not a file name", path.display()))?;
+pub fn write_output(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let fail = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    if path.as_os_str() == "-" {
+        let mut out = std::io::stdout().lock();
+        return out
+            .write_all(bytes)
+            .and_then(|()| out.flush())
+            .map_err(|e| format!("cannot write to standard output: {e}"));
+    }
+    let target = follow_links(path).map_err(fail)?;
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => Err(format!("cannot write {}: it is a folder", path.display())),
+        Ok(m) if !m.is_file() => {
+            let mut f = std::fs::OpenOptions::new().write(true).open(&target).map_err(fail)?;
+            f.write_all(bytes).and_then(|()| f.flush()).map_err(fail)
+        }
+        _ => replace_file(&target, bytes).map_err(fail),
+    }
+}
+
+/// The path a chain of symbolic links ends at (the path itself if it is not
+/// a link, or if it does not exist).
+fn follow_links(path: &Path) -> std::io::Result<std::path::PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let link = std::fs::read_link(&p)?;
+                p = match p.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+            }
+            _ => return Ok(p),
+        }
+    }
+    Err(std::io::Error::other("too many levels of symbolic links"))
+}
+
+/// A temporary file beside `path`, renamed over it.
+fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let name = path.file_name().ok_or_else(|| std::io::Error::other("not a file name"))?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(name);
     tmp_name.push(format!(".{}.tmp", std::process::id()));
@@ -186,10 +237,10 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
     let result = std::fs::File::create(&tmp)
         .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
         .and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|e| {
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        format!("cannot write {}: {e}", path.display())
-    })
+    }
+    result
 }
 
 #[cfg(test)]
@@ -230,13 +281,15 @@ mod tests {
     fn a_failed_write_leaves_nothing_behind() {
         let dir = std::env::temp_dir().join(format!("worley-picture-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        // The target is a folder: the rename fails after the data is written.
+        // A folder is refused before anything is written; a file in a
+        // folder that does not exist fails at the temporary file.
         let target = dir.join("taken");
         std::fs::create_dir_all(target.join("inner")).unwrap();
-        assert!(write_atomically(&target, b"data").unwrap_err().contains("cannot write"));
+        assert!(write_output(&target, b"data").unwrap_err().contains("it is a folder"));
+        assert!(write_output(&dir.join("missing/x.bin"), b"data").unwrap_err().contains("cannot write"));
         let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(left, vec![std::ffi::OsString::from("taken")]);
-        write_atomically(&dir.join("ok.bin"), b"data").unwrap();
+        write_output(&dir.join("ok.bin"), b"data").unwrap();
         assert_eq!(std::fs::read(dir.join("ok.bin")).unwrap(), b"data");
         std::fs::remove_dir_all(&dir).unwrap();
     }

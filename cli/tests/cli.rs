@@ -5,9 +5,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use worley::picture::from_pfm;
 use worley::texture::{Combination, Fractal, Texture};
 use worley::{Config, Metric, Period};
+use worley_cli::picture::from_pfm;
 
 fn worley(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_worley")).args(args).output().expect("the worley binary runs")
@@ -29,7 +29,7 @@ fn png_size(path: &Path) -> (u32, u32) {
 }
 
 /// Pixel (i, j) samples axes 0 and 1 at (origin + ½·step) + (i, j)·step with
-/// step = extent / width (the documentation of `worley::render`).
+/// step = extent / width (the documentation of `worley_cli::views`).
 fn pixel(origin: [f64; 2], extent: f64, width: usize, i: usize, j: usize) -> [f64; 2] {
     let step = extent / width as f64;
     [origin[0] + 0.5 * step + step * i as f64, origin[1] + 0.5 * step + step * j as f64]
@@ -177,5 +177,58 @@ fn an_unwritable_output_is_an_error_and_leaves_no_file() {
     assert!(String::from_utf8(out.stderr).unwrap().contains("cannot write"));
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left, vec![std::ffi::OsString::from("taken.png")]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+
+#[test]
+fn outputs_follow_symlinks_and_write_special_files_directly() {
+    use std::os::unix::fs::{symlink, FileTypeExt};
+    let dir = scratch("paths");
+    let args = |png: &Path| -> Vec<String> {
+        ["render", "--size", "16x8", "--png"].iter().map(|s| s.to_string()).chain([png.display().to_string()]).collect()
+    };
+    let run = |png: &Path| {
+        let a = args(png);
+        worley(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+
+    // A chain of two links, one relative: the links stay links, the
+    // target gets the image.
+    std::fs::create_dir_all(dir.join("real")).unwrap();
+    std::fs::write(dir.join("real/target.png"), b"old").unwrap();
+    symlink("real/target.png", dir.join("first.png")).unwrap();
+    symlink(dir.join("first.png"), dir.join("second.png")).unwrap();
+    let out = run(&dir.join("second.png"));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(std::fs::symlink_metadata(dir.join("second.png")).unwrap().file_type().is_symlink());
+    assert!(std::fs::symlink_metadata(dir.join("first.png")).unwrap().file_type().is_symlink());
+    assert!(std::fs::read(dir.join("real/target.png")).unwrap().starts_with(PNG_SIGNATURE));
+
+    // A FIFO is written through, not replaced by a regular file.
+    let fifo = dir.join("pipe.png");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(fifo).unwrap())
+    };
+    let out = run(&fifo);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(reader.join().unwrap().starts_with(PNG_SIGNATURE));
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+
+    // `-` is standard output.
+    let out = run(Path::new("-"));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.stdout.starts_with(PNG_SIGNATURE));
+    assert!(!Path::new("-").exists());
+
+    // A link into a folder that does not exist: one line, exit code 2.
+    symlink(dir.join("nowhere/x.png"), dir.join("dangling.png")).unwrap();
+    let out = run(&dir.join("dangling.png"));
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.starts_with("worley: cannot write") && err.lines().count() == 1, "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use worley::harness::{self, sample_point, Campaign, Report};
 use worley::{Config, Mode, Outputs, Reference, Simd};
+use worley_harness::{self as harness, sample_point, Campaign, Report};
 
 /// Options of `worley tune`.
 #[derive(clap::Args, Debug)]
@@ -134,7 +134,7 @@ fn sweep<const D: usize>(
     bumps: &[f64],
 ) -> Result<Vec<Row>, String> {
     let settings = densities.len() * bumps.len();
-    let bar = super::progress((settings * (1 + RUNS * orders.len())) as u64, "steps");
+    let bar = crate::commands::progress((settings * (1 + RUNS * orders.len())) as u64, "steps");
     let mut rows = Vec::new();
     let top = *orders.iter().max().unwrap_or(&1);
     for &bump in bumps {
@@ -235,9 +235,9 @@ fn sweep<const D: usize>(
 
 /// `worley tune`.
 pub fn tune(args: &TuneArgs) -> Result<(), String> {
-    let densities: Vec<f64> = super::parse_list(&args.densities, "density")?;
-    let bumps: Vec<f64> = super::parse_list(&args.bumps, "bump")?;
-    let orders: Vec<usize> = super::parse_list(&args.orders, "order")?;
+    let densities: Vec<f64> = crate::commands::parse_list(&args.densities, "density")?;
+    let bumps: Vec<f64> = crate::commands::parse_list(&args.bumps, "bump")?;
+    let orders: Vec<usize> = crate::commands::parse_list(&args.orders, "order")?;
     if let Some(n) = orders.iter().find(|n| ![1, 2, 4, 8].contains(*n)) {
         return Err(format!("order {n} is not swept: use 1, 2, 4 or 8"));
     }
@@ -306,107 +306,91 @@ pub fn tune(args: &TuneArgs) -> Result<(), String> {
     std::fs::create_dir_all(&args.out).map_err(|e| format!("cannot create {}: {e}", args.out.display()))?;
     let json = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
     let (json_path, svg_path) = (args.out.join("tune.json"), args.out.join("tune.svg"));
-    worley::picture::write_atomically(&json_path, json.as_bytes())?;
-    worley::picture::write_atomically(&svg_path, plot(&rows, args.dim).as_bytes())?;
+    crate::picture::write_output(&json_path, json.as_bytes())?;
+    crate::picture::write_output(&svg_path, plot(&rows, args.dim)?.as_bytes())?;
     println!("\nwrote {} and {} ({:.1} s)", json_path.display(), svg_path.display(), started.elapsed().as_secs_f64());
     Ok(())
 }
 
 /// Speed against window wrong-rate (log scale), a line per order and bump,
-/// each point labelled with its λ; the default is ringed.
-pub fn plot(rows: &[Row], dim: u8) -> String {
-    let (w, h, left, bottom, top, right) = (720.0, 460.0, 70.0, 50.0, 40.0, 150.0);
+/// each point labelled with its λ; filled points are on their order's
+/// front, bold labels on the joint front, and the default is ringed.
+///
+/// # Errors
+/// The plotting library's message, should drawing fail.
+pub fn plot(rows: &[Row], dim: u8) -> Result<String, String> {
+    use plotters::prelude::*;
+    let fail = |e: &dyn std::fmt::Display| format!("cannot draw the plot: {e}");
+    // Wrong-rates below the floor (often exactly 0) are drawn at the floor.
     let floor = 1e-5;
-    let x_of = |e: f64| e.max(floor).log10();
-    let (x_lo, x_hi) = (floor.log10(), rows.iter().map(|r| x_of(r.window_wrong)).fold(-1.0, f64::max).ceil());
-    let y_hi = rows.iter().map(|r| r.simd_mps).fold(1.0, f64::max) * 1.1;
-    let px = |e: f64| left + (x_of(e) - x_lo) / (x_hi - x_lo) * (w - left - right);
-    let py = |s: f64| h - bottom - s / y_hi * (h - top - bottom);
-    let colours = ["#c0392b", "#2471a3", "#229954", "#7d3c98", "#b9770e", "#555555"];
-    let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n\
-         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
-         <text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{dim}D: SIMD speed (exact) against window-only error, per density λ</text>\n",
-        (w - right + left) / 2.0
-    );
-    svg += &format!(
-        "<line x1=\"{left}\" y1=\"{0}\" x2=\"{1}\" y2=\"{0}\" stroke=\"black\"/><line x1=\"{left}\" y1=\"{top}\" x2=\"{left}\" y2=\"{0}\" stroke=\"black\"/>\n",
-        h - bottom,
-        w - right
-    );
-    let mut decade = x_lo;
-    while decade <= x_hi + 1e-9 {
-        let x = px(10f64.powf(decade));
-        svg += &format!(
-            "<line x1=\"{x}\" y1=\"{0}\" x2=\"{x}\" y2=\"{1}\" stroke=\"#ddd\"/><text x=\"{x}\" y=\"{2}\" text-anchor=\"middle\">{3}%</text>\n",
-            h - bottom,
-            top,
-            h - bottom + 16.0,
-            100.0 * 10f64.powf(decade)
-        );
-        decade += 1.0;
-    }
-    for i in 0..=5 {
-        let s = y_hi * i as f64 / 5.0;
-        svg += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{s:.0}</text>\n", left - 6.0, py(s) + 4.0);
-    }
-    svg += &format!(
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">share of samples with a wrong F_n using the 3^d window only (log; below 0.001 % drawn at 0.001 %)</text>\n",
-        (w - right + left) / 2.0,
-        h - 12.0
-    );
-    svg += &format!(
-        "<text transform=\"translate(18 {}) rotate(-90)\" text-anchor=\"middle\">M samples/s, one thread</text>\n",
-        (h - bottom + top) / 2.0
-    );
-    let mut series: Vec<(usize, f64)> = rows.iter().map(|r| (r.order, r.bump)).collect();
-    series.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-    series.dedup();
-    for (s, (order, bump)) in series.iter().enumerate() {
-        let colour = colours[s % colours.len()];
-        let points: Vec<&Row> = rows.iter().filter(|r| r.order == *order && r.bump == *bump).collect();
-        let path: Vec<String> =
-            points.iter().map(|r| format!("{:.1},{:.1}", px(r.window_wrong), py(r.simd_mps))).collect();
-        svg += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"{colour}\"/>\n", path.join(" "));
-        for r in &points {
-            let (x, y) = (px(r.window_wrong), py(r.simd_mps));
-            let fill = if r.on_front { colour } else { "white" };
-            svg += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"3.5\" fill=\"{fill}\" stroke=\"{colour}\"/>\n");
-            let weight = if r.joint_front { "bold" } else { "normal" };
-            svg += &format!(
-                "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\" font-weight=\"{weight}\">{}</text>\n",
-                x + 5.0,
-                y - 5.0,
-                r.density
-            );
-            if r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0 {
-                svg += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"8\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n");
-            }
+    let x_of = |r: &Row| r.window_wrong.max(floor);
+    let x_hi = rows.iter().map(x_of).fold(1e-2, f64::max) * 3.0;
+    let y_hi = rows.iter().map(|r| r.simd_mps).fold(1.0, f64::max) * 1.15;
+    let colours = [RGBColor(192, 57, 43), RGBColor(36, 113, 163), RGBColor(34, 153, 84), RGBColor(125, 60, 152)];
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (760, 480)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("{dim}D: SIMD speed (exact) against window-only error, per density λ"), ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(56)
+            .build_cartesian_2d((floor..x_hi).log_scale(), 0.0..y_hi)
+            .map_err(|e| fail(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("share of samples with a wrong F_n, 3^d window only (below 0.001 % drawn at 0.001 %)")
+            .y_desc("M samples/s, one thread")
+            .x_label_formatter(&|v| format!("{}%", 100.0 * v))
+            .draw()
+            .map_err(|e| fail(&e))?;
+        let mut series: Vec<(usize, f64)> = rows.iter().map(|r| (r.order, r.bump)).collect();
+        series.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+        series.dedup();
+        for (s, &(order, bump)) in series.iter().enumerate() {
+            let colour = colours[s % colours.len()];
+            let points: Vec<&Row> = rows.iter().filter(|r| r.order == order && r.bump == bump).collect();
+            let label = if bump == 0.0 { format!("F{order}") } else { format!("F{order}, bump {bump}") };
+            chart
+                .draw_series(LineSeries::new(points.iter().map(|r| (x_of(r), r.simd_mps)), colour))
+                .map_err(|e| fail(&e))?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            let style = |r: &Row| if r.on_front { colour.filled() } else { colour.stroke_width(1) };
+            chart
+                .draw_series(points.iter().map(|r| Circle::new((x_of(r), r.simd_mps), 4, style(r))))
+                .map_err(|e| fail(&e))?;
+            chart
+                .draw_series(points.iter().map(|r| {
+                    let font = ("sans-serif", 11).into_font();
+                    let font = if r.joint_front { font.style(FontStyle::Bold) } else { font };
+                    Text::new(format!("{}", r.density), (x_of(r), r.simd_mps), font)
+                }))
+                .map_err(|e| fail(&e))?;
+            chart
+                .draw_series(
+                    points
+                        .iter()
+                        .filter(|r| r.density == worley::config::DEFAULT_DENSITY && r.bump == 0.0)
+                        .map(|r| Circle::new((x_of(r), r.simd_mps), 9, BLACK.stroke_width(2))),
+                )
+                .map_err(|e| fail(&e))?;
         }
-        let ly = top + 20.0 + 18.0 * s as f64;
-        let label = if *bump == 0.0 { format!("F{order}") } else { format!("F{order}, bump {bump}") };
-        svg += &format!(
-            "<line x1=\"{0}\" y1=\"{ly}\" x2=\"{1}\" y2=\"{ly}\" stroke=\"{colour}\" stroke-width=\"2\"/><text x=\"{2}\" y=\"{3}\">{label}</text>\n",
-            w - right + 15.0,
-            w - right + 35.0,
-            w - right + 40.0,
-            ly + 4.0
-        );
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE)
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| fail(&e))?;
+        root.draw(&Text::new(
+            "ringed: default λ; filled: on its order's front; bold λ: on the joint front",
+            (80, 40),
+            ("sans-serif", 11),
+        ))
+        .map_err(|e| fail(&e))?;
+        root.present().map_err(|e| fail(&e))?;
     }
-    let ly = top + 20.0 + 18.0 * series.len() as f64 + 10.0;
-    svg += &format!(
-        "<circle cx=\"{0}\" cy=\"{ly}\" r=\"8\" fill=\"none\" stroke=\"black\"/><text x=\"{1}\" y=\"{2}\">default λ</text>\n\
-         <text x=\"{1}\" y=\"{3}\">filled: on the front</text>\n\
-         <text x=\"{1}\" y=\"{4}\">of its order</text>\n\
-         <text x=\"{1}\" y=\"{5}\" font-weight=\"bold\">bold λ: on the</text>\n\
-         <text x=\"{1}\" y=\"{6}\" font-weight=\"bold\">joint front</text>\n</svg>\n",
-        w - right + 25.0,
-        w - right + 40.0,
-        ly + 4.0,
-        ly + 22.0,
-        ly + 36.0,
-        ly + 54.0,
-        ly + 68.0
-    );
-    svg
+    Ok(svg)
 }

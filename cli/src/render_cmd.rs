@@ -2,13 +2,13 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::picture::{self, ColourMap, Rgb};
+use crate::views::{self as render, Shading, View};
 use clap::ValueEnum;
 use worley::config::DEFAULT_DENSITY;
-use worley::harness::uniform;
-use worley::picture::{self, ColourMap, Rgb};
-use worley::render::{self, Shading, View};
 use worley::texture::{Combination, Fractal, Range, Texture};
 use worley::{Config, Metric, Period};
+use worley_harness::uniform;
 
 /// How values become colours (command-line form of [`Shading`]).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum, Debug)]
@@ -37,7 +37,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "F1", value_parser = parse_combination)]
     pub combo: Combination,
     /// Metric: euclidean, manhattan, chebyshev, or minkowski:P with P >= 1.
-    #[arg(long, default_value = "euclidean", value_parser = crate::parse_metric)]
+    #[arg(long, default_value = "euclidean", value_parser = crate::commands::parse_metric)]
     pub metric: Metric,
     /// Image size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
@@ -48,7 +48,7 @@ pub struct RenderArgs {
     /// The image's corner on axes 0 and 1, X,Y.
     #[arg(long, default_value = "0,0", value_parser = parse_pair)]
     pub origin: (f64, f64),
-    /// Coordinates on axes 2 and 3 for a plane through 3D or 4D, Z[,W].
+    /// Coordinates on axes 2 and 3 for a plane through 3D or 4D, given as Z or Z,W.
     #[arg(long, default_value = "0.5,0.5", value_parser = parse_pair)]
     pub slice: (f64, f64),
     /// Pattern seed.
@@ -75,7 +75,7 @@ pub struct RenderArgs {
     /// Amplitude factor between octaves.
     #[arg(long, default_value_t = 0.5)]
     pub gain: f32,
-    /// Make the texture tile: whole cells per axis, P0,P1[,P2,P3]; the view
+    /// Make the texture tile: whole cells per axis, P0,P1 (then P2 and P3 in 3D and 4D); the view
     /// is then in cells (a tile is --extent P0).
     #[arg(long, value_parser = parse_period)]
     pub period: Option<Cells>,
@@ -111,7 +111,7 @@ fn parse_size(s: &str) -> Result<(usize, usize), String> {
 }
 
 fn parse_pair(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<f64> = super::parse_list(s, "coordinate")?;
+    let v: Vec<f64> = crate::commands::parse_list(s, "coordinate")?;
     let ok = v.iter().all(|x| x.is_finite());
     match v[..] {
         [a] if ok => Ok((a, a)),
@@ -130,7 +130,7 @@ pub struct Cells(pub Vec<u32>);
 
 fn parse_period(s: &str) -> Result<Cells, String> {
     let usage = format!("period {s:?}: use 1 to 4 whole numbers of cells from 1 to {}", worley::simd::MAX_PERIOD);
-    let v: Vec<u32> = super::parse_list(s, "period").map_err(|_| usage.clone())?;
+    let v: Vec<u32> = crate::commands::parse_list(s, "period").map_err(|_| usage.clone())?;
     if v.is_empty() || v.len() > 4 || v.iter().any(|&p| p == 0 || p > worley::simd::MAX_PERIOD) {
         return Err(usage);
     }
@@ -245,9 +245,9 @@ fn write_outputs(png: &Path, pfm: Option<&Path>, values: &[f32], image: &Rgb) ->
             std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         }
     }
-    picture::write_atomically(png, &image.to_png()?)?;
+    picture::write_output(png, &image.to_png()?)?;
     if let Some(pfm) = pfm {
-        picture::write_atomically(pfm, &picture::to_pfm(image.width, image.height, values))?;
+        picture::write_output(pfm, &picture::to_pfm(image.width, image.height, values))?;
     }
     Ok(())
 }
@@ -255,24 +255,34 @@ fn write_outputs(png: &Path, pfm: Option<&Path>, values: &[f32], image: &Rgb) ->
 /// `worley render`.
 pub fn render_command(args: &RenderArgs) -> Result<(), String> {
     let started = std::time::Instant::now();
+    // When an image goes to standard output, the messages go to standard
+    // error so that the image stays whole.
+    let piped = args.png.as_os_str() == "-" || args.pfm.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    let say = |line: String| {
+        if piped {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
+    };
     let (values, image) = match args.random_combos {
         None => {
             let spinner = indicatif::ProgressBar::new_spinner().with_message("rendering");
             spinner.enable_steady_tick(std::time::Duration::from_millis(200));
             let (values, image, range) = render_combo(args, &args.combo)?;
             spinner.finish_and_clear();
-            println!("{}: range [{:.4}, {:.4}] mapped to the colour map", args.combo.name(), range.lo, range.hi);
+            say(format!("{}: range [{:.4}, {:.4}] mapped to the colour map", args.combo.name(), range.lo, range.hi));
             (values, image)
         }
         Some(k) if (1..=64).contains(&k) => {
             let combos = random_combinations(k, args.combo_seed);
-            let bar = super::progress(k as u64, "combinations");
+            let bar = crate::commands::progress(k as u64, "combinations");
             let mut tiles = Vec::new();
             for (i, c) in combos.iter().enumerate() {
                 let (v, img, _) = render_combo(args, c)?;
                 let Combination::Linear(cs) = c else { unreachable!("random combinations are linear") };
                 bar.suspend(|| {
-                    println!(
+                    say(format!(
                         "{:>3}: C = [{:+.2}, {:+.2}, {:+.2}, {:+.2}]  {}",
                         i + 1,
                         cs[0],
@@ -280,7 +290,7 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
                         cs[2],
                         cs[3],
                         c.name()
-                    )
+                    ))
                 });
                 tiles.push((v, img));
                 bar.inc(1);
@@ -291,14 +301,14 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
         Some(k) => return Err(format!("--random-combos {k}: use 1 to 64")),
     };
     write_outputs(&args.png, args.pfm.as_deref(), &values, &image)?;
-    println!(
+    say(format!(
         "wrote {} ({}x{}){} in {:.2} s",
         args.png.display(),
         image.width,
         image.height,
         args.pfm.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default(),
         started.elapsed().as_secs_f64()
-    );
+    ));
     Ok(())
 }
 
@@ -399,13 +409,16 @@ pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathB
         ),
     ];
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let bar =
-        if show_progress { super::progress(figures.len() as u64, "gallery") } else { indicatif::ProgressBar::hidden() };
+    let bar = if show_progress {
+        crate::commands::progress(figures.len() as u64, "gallery")
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     let mut written = Vec::new();
     for (name, make) in &figures {
         let (_, image) = make()?;
         let path = dir.join(name);
-        picture::write_atomically(&path, &image.to_png()?)?;
+        picture::write_output(&path, &image.to_png()?)?;
         written.push(path);
         bar.inc(1);
     }

@@ -3,18 +3,16 @@
 //! configuration), `worley render` (one image), `worley tune` (the density
 //! sweep) and `worley ranges` (the combinations' output ranges).
 
-mod cli;
-
 use std::path::Path;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use cli::render::{render_command, RenderArgs};
-use cli::tune::{tune, TuneArgs};
-use cli::{ranges, RangesArgs};
-use worley::harness::{self, Campaign, Report};
-use worley::picture;
 use worley::{Config, Metric, Mode, Outputs, Reference, Simd};
+use worley_cli::commands::{parse_metric, ranges, RangesArgs};
+use worley_cli::picture;
+use worley_cli::render_cmd::{render_command, RenderArgs};
+use worley_cli::tune::{tune, TuneArgs};
+use worley_harness::{self as harness, Campaign, Report};
 
 #[derive(Parser)]
 #[command(name = "worley", version, about = "Worley's cellular basis: harness and tools")]
@@ -139,11 +137,6 @@ fn usage_error(e: &clap::Error) -> ExitCode {
     ExitCode::from(2)
 }
 
-/// The metric's command-line spelling (shared with `worley render`).
-pub fn parse_metric(s: &str) -> Result<Metric, String> {
-    s.parse()
-}
-
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -155,11 +148,13 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_command(&args),
         Some(Command::Tune(args)) => tune(&args),
         Some(Command::Ranges(args)) => ranges(&args),
-        Some(Command::Gallery(args)) => cli::render::gallery(&args.out, args.tile as usize, true).map(|written| {
-            for path in written {
-                println!("{}", path.display());
-            }
-        }),
+        Some(Command::Gallery(args)) => {
+            worley_cli::render_cmd::gallery(&args.out, args.tile as usize, true).map(|written| {
+                for path in written {
+                    println!("{}", path.display());
+                }
+            })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -247,7 +242,7 @@ fn main_job() -> Result<(), String> {
     let mut reports = Vec::new();
     // A progress bar on standard error (drawn on a terminal only); table
     // lines go to standard output above it.
-    let bar = cli::progress(28, "main job");
+    let bar = worley_cli::commands::progress(28, "main job");
     macro_rules! say {
         ($($t:tt)*) => { bar.suspend(|| println!($($t)*)) };
     }
@@ -393,11 +388,11 @@ fn main_job() -> Result<(), String> {
 
     std::fs::create_dir_all("out").map_err(|e| format!("cannot create out/: {e}"))?;
     let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
-    picture::write_atomically(Path::new("out/harness.json"), json.as_bytes())?;
+    picture::write_output(Path::new("out/harness.json"), json.as_bytes())?;
 
     let drawn = std::time::Instant::now();
     bar.set_message("gallery");
-    let images = cli::render::gallery(Path::new("out/gallery"), 384, false)?;
+    let images = worley_cli::render_cmd::gallery(Path::new("out/gallery"), 384, false)?;
     bar.inc(1);
     bar.finish_and_clear();
     say!("\ngallery ({} images, {:.1} s on all cores):", images.len(), drawn.elapsed().as_secs_f64());

@@ -3,8 +3,8 @@
 use std::fmt::Write as _;
 
 use super::Campaign;
-use crate::config::Config;
-use crate::definition::Pattern;
+use worley::config::Config;
+use worley::definition::Pattern;
 
 /// Per-order results of a campaign.
 #[derive(Clone, Debug, Default, serde::Serialize)]

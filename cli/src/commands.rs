@@ -1,8 +1,5 @@
-//! The subcommands beyond the harness: rendering, the gallery, the density
-//! sweep and the range table.
-
-pub mod render;
-pub mod tune;
+//! What the subcommands share (progress bars, lists, metrics) and `worley
+//! ranges`.
 
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -16,6 +13,11 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     );
     bar.set_message(what.to_string());
     bar
+}
+
+/// The metric's command-line spelling (shared by `check` and `render`).
+pub fn parse_metric(s: &str) -> Result<worley::Metric, String> {
+    s.parse()
 }
 
 /// Comma-separated numbers.

@@ -31,9 +31,9 @@ pub mod report;
 
 use std::time::Instant;
 
-use crate::config::{Config, Mode, MAX_ORDER};
-use crate::definition::{splitmix64, Pattern};
-use crate::reference::{outside_distance, Features, Reference};
+use worley::config::{Config, Mode, MAX_ORDER};
+use worley::definition::{splitmix64, Pattern};
+use worley::reference::{outside_distance, Features, Reference};
 
 pub use report::{OrderReport, Report};
 
@@ -79,23 +79,23 @@ impl<const D: usize> Kernel<D> for Reference<D> {
     }
 }
 
-impl<const D: usize, const N: usize> Kernel<D> for crate::simd::Simd<D, N> {
+impl<const D: usize, const N: usize> Kernel<D> for worley::simd::Simd<D, N> {
     fn name(&self) -> String {
         "simd-f32x8".into()
     }
     fn config(&self) -> &Config {
-        crate::simd::Simd::config(self)
+        worley::simd::Simd::config(self)
     }
     fn pattern(&self) -> &Pattern<D> {
-        crate::simd::Simd::pattern(self)
+        worley::simd::Simd::pattern(self)
     }
     /// The 1-lane instantiation.
     fn evaluate(&self, x: [f64; D]) -> Features<D> {
-        widen_features(&crate::simd::Simd::evaluate(self, x))
+        widen_features(&worley::simd::Simd::evaluate(self, x))
     }
     /// The 8-lane instantiation through the slice API.
     fn evaluate_batch(&self, xs: &[[f64; D]], out: &mut [Features<D>]) {
-        let mut lanes = [crate::simd::Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 64];
+        let mut lanes = [worley::simd::Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 64];
         for (chunk, dst) in xs.chunks(64).zip(out.chunks_mut(64)) {
             self.evaluate_slice(chunk, &mut lanes).expect("a chunk of 64 fits 64 results");
             for (o, r) in dst.iter_mut().zip(&lanes) {
@@ -113,7 +113,7 @@ impl<const D: usize, const N: usize> Kernel<D> for crate::simd::Simd<D, N> {
 }
 
 /// An f32 result as the harness's f64 [`Features`].
-pub fn widen_features<const D: usize, const N: usize>(r: &crate::simd::Features32<D, N>) -> Features<D> {
+pub fn widen_features<const D: usize, const N: usize>(r: &worley::simd::Features32<D, N>) -> Features<D> {
     let mut out = Features::empty(N);
     for k in 0..N {
         out.distance[k] = r.distance[k] as f64;
@@ -196,7 +196,7 @@ pub fn run<const D: usize, K: Kernel<D>>(kernel: &K, campaign: &Campaign) -> Rep
     // As many cells as the grid bias samples, at least 2 per axis.
     let side = (campaign.grid_cells as f64).powf(1.0 / D as f64).floor().max(2.0) as i64;
     let keys = kernel.pattern().keys();
-    report.repeats = Some(repeats::repeated_runs::<D>(side, |c| crate::definition::cell_hash(keys, c)));
+    report.repeats = Some(repeats::repeated_runs::<D>(side, |c| worley::definition::cell_hash(keys, c)));
     report
 }
 

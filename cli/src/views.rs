@@ -7,8 +7,8 @@
 //! PFM) are the texture's values at exactly those points.
 
 use crate::picture::{id_colour, ColourMap, Rgb};
-use crate::texture::{bump, Range, Texture};
-use crate::{Grid, Outputs, Simd};
+use worley::texture::{bump, Range, Texture};
+use worley::{Grid, Outputs, Simd};
 
 /// A plane of pixels through space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,9 +95,9 @@ pub fn render<const D: usize, const N: usize>(
             })
         }
         Shading::Flagstones { mortar } => {
-            let config = crate::Config { order: 2, ..*texture.kernel().config() };
+            let config = worley::Config { order: 2, ..*texture.kernel().config() };
             let cells = Simd::<D, 2>::new(config, Outputs::Ids).map_err(|e| e.to_string())?;
-            let stain = crate::perlin::Perlin::new(config.seed);
+            let stain = worley::perlin::Perlin::new(config.seed);
             per_block(&grid, n, |block| {
                 // A periodic texture's flagstones tile with it.
                 let f = match texture.period() {
@@ -133,6 +133,6 @@ fn per_block<const D: usize>(
     shade: impl Fn(&[[f64; D]; 8]) -> [[u8; 3]; 8] + Sync,
 ) -> Vec<[u8; 3]> {
     let mut pixels = vec![[0u8; 3]; n];
-    grid.fill_by_eights(&mut pixels, shade);
+    grid.fill_by_eights(&mut pixels, shade).expect("the buffer holds one pixel per grid point");
     pixels
 }
