@@ -17,10 +17,15 @@
 //!   a feature point's fixed-point coordinate, so a coordinate is its 24-bit
 //!   integer converted exactly, with no multiply. Scaling by a power of two
 //!   is exact: every value is the cell-unit value times 2^24, bit for bit.
-//! - **The cell hash and the LCG** run in `u32` lanes. Each point coordinate
+//! - **The cell hash and the LCG** run in `u32` lanes. The axis words of a
+//!   sample's 3 × d neighbouring axis terms are mixed once, when it is
+//!   located, and shared by every cell that uses them. Each point coordinate
 //!   comes from the cell's state with one independent multiply-add
 //!   (s_k = A_k·s₀ + C_k, [`lcg_jump`]) instead of a chain of dependent
 //!   multiplies.
+//! - **Minkowski** ranks are the distance itself, computed per lane in f64
+//!   scaled by the largest component ([`Metric::rank`]) and rounded once, so
+//!   no power overflows for any p; the other metrics stay in f32 lanes.
 //! - **Populations.** The default table never decreases, so point j of a
 //!   cell exists exactly where the state's top byte reaches a threshold: one
 //!   compare in lanes, no table lookup. Points are produced while any lane
