@@ -1,4 +1,5 @@
-//! Small numerical helpers: the gamma function and ball volumes.
+//! Small numerical helpers: the gamma function, ball volumes and a seeded
+//! uniform generator.
 //!
 //! The scale constant of the basis and the statistical tests need Γ at a few
 //! arguments (Γ(1 + 1/d), Γ(1 + d/2), Γ(1 + d/p)). A Lanczos approximation is
@@ -36,6 +37,17 @@ pub fn gamma(x: f64) -> f64 {
         let t = z + LANCZOS_G + 0.5;
         (2.0 * std::f64::consts::PI).sqrt() * t.powf(z + 0.5) * (-t).exp() * series
     }
+}
+
+/// A uniform f64 in [0, 1) from a seed and a counter (SplitMix64 twice): a
+/// counter-based generator, so point i of a seeded set needs no other point.
+/// The harness draws its samples with it, and
+/// [`Texture::measure_range`](crate::texture::Texture::measure_range) its
+/// sample points.
+#[inline]
+pub fn uniform(seed: u64, counter: u64) -> f64 {
+    use crate::definition::splitmix64;
+    (splitmix64(seed ^ splitmix64(counter)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
 /// Volume of the Euclidean unit ball in `dim` dimensions: π^(d/2) / Γ(d/2 + 1).

@@ -522,7 +522,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         };
         let offset = if self.period.is_some() { 0.0 } else { -1000.0 };
         let points: Vec<[f64; D]> = (0..samples)
-            .map(|i| std::array::from_fn(|a| offset + extent[a] * uniform(seed, (i * D + a) as u64)))
+            .map(|i| std::array::from_fn(|a| offset + extent[a] * crate::math::uniform(seed, (i * D + a) as u64)))
             .collect();
         let mut v = vec![0f32; samples];
         self.values(&points, &mut v).expect("buffer sized to the points");
@@ -712,11 +712,4 @@ pub fn default_range(dim: usize, combination: &Combination) -> Option<Range> {
         .iter()
         .find(|(d, n, _, _)| *d == dim && n.parse::<Combination>().as_ref() == Ok(combination))
         .map(|&(_, _, lo, hi)| Range { lo, hi })
-}
-
-/// A uniform f64 in [0, 1) from a seed and a counter (SplitMix64 twice),
-/// for the sample points of [`Texture::measure_range`].
-fn uniform(seed: u64, counter: u64) -> f64 {
-    use crate::definition::splitmix64;
-    (splitmix64(seed ^ splitmix64(counter)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }

@@ -32,7 +32,7 @@ pub mod report;
 use std::time::Instant;
 
 use worley::config::{Config, Mode, MAX_ORDER};
-use worley::definition::{splitmix64, Pattern};
+use worley::definition::Pattern;
 use worley::reference::{outside_distance, Features, Reference};
 
 pub use report::{OrderReport, Report};
@@ -156,11 +156,9 @@ impl Default for Campaign {
     }
 }
 
-/// A uniform f64 in [0, 1) from a seed and a counter (SplitMix64 twice).
-#[inline]
-pub fn uniform(seed: u64, counter: u64) -> f64 {
-    (splitmix64(seed ^ splitmix64(counter)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-}
+/// A uniform f64 in [0, 1) from a seed and a counter (the kernel crate's
+/// generator, so the harness and `Texture::measure_range` draw alike).
+pub use worley::math::uniform;
 
 /// Sample i of a campaign: uniform in [−range, range]^d.
 #[inline]

@@ -83,15 +83,7 @@ fn equal_pairs<T: Ord + Copy>(v: &mut [T]) -> u64 {
 
 /// `f(0..n)` into a vector, on all cores with the `parallel` feature.
 fn collect<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
-    #[cfg(feature = "parallel")]
-    {
-        use rayon::prelude::*;
-        (0..n).into_par_iter().map(f).collect()
-    }
-    #[cfg(not(feature = "parallel"))]
-    {
-        (0..n).map(f).collect()
-    }
+    super::chunked(n, |range| range.map(&f).collect::<Vec<T>>()).into_iter().flatten().collect()
 }
 
 #[cfg(test)]

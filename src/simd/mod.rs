@@ -177,19 +177,24 @@ pub struct Simd<const D: usize, const N: usize> {
 struct Located<L: Lanes, const D: usize> {
     /// Axis words ([`axis_word`](crate::definition::axis_word)) of the cells at offsets −1, 0, +1, per axis.
     words: [[L::U; 3]; D],
-    /// The raw axis term of the sample's own cell, per axis (its low word
-    /// when the lane is within [`FAST_RANGE`]).
-    centre: [L::U; D],
     /// The fraction f ∈ [0, 1] per axis, rounded to f32.
     f: [L::F; D],
-    /// Cells per axis and lane, kept only when some lane is outside the fast
-    /// range (the wide search recomputes them from `centre` otherwise).
-    cell: Option<[[i64; 8]; D]>,
+    /// The lanes' own cells, for the wide search.
+    cells: Cells<L, D>,
     /// Lanes with a valid input.
     valid: [bool; 8],
     /// Cells per axis after which the pattern repeats (periodic variant):
     /// every cell is wrapped into [0, period) before it is hashed.
     period: Option<[i64; D]>,
+}
+
+/// Where the wide search finds the lanes' own cells.
+enum Cells<L: Lanes, const D: usize> {
+    /// Every lane within [`FAST_RANGE`]: per axis, the cell's low word (its
+    /// raw axis term), from which the cell follows by sign extension.
+    Low([L::U; D]),
+    /// Some lane beyond it: the cells themselves, per axis and lane.
+    Full([[i64; 8]; D]),
 }
 
 impl<L: Lanes, const D: usize> Located<L, D> {
@@ -205,15 +210,8 @@ impl<L: Lanes, const D: usize> Located<L, D> {
             words: std::array::from_fn(|a| {
                 std::array::from_fn(|o| words::<L>(a, &cell[a], o as i64 - 1, period.map(|p| p[a])))
             }),
-            centre: std::array::from_fn(|a| {
-                let mut t = [0u32; 8];
-                for (ti, c) in t.iter_mut().zip(&cell[a]).take(L::N) {
-                    *ti = axis_term(*c);
-                }
-                L::u_load(&t[..L::N])
-            }),
             f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
-            cell: Some(cell),
+            cells: Cells::Full(cell),
             valid,
             period,
         }
@@ -428,9 +426,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 // Written out: an array `map` here stayed a call with copies.
                 [word::<L>(a, L::u_add(t, L::u(u32::MAX))), word::<L>(a, t), word::<L>(a, L::u_add(t, L::u(1)))]
             }),
-            centre: std::array::from_fn(|a| L::u_load(&lo[a][..L::N])),
             f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
-            cell: None,
+            cells: Cells::Low(std::array::from_fn(|a| L::u_load(&lo[a][..L::N]))),
             valid: [true; 8],
             period: None,
         }
@@ -582,13 +579,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         mut open: L::M,
         best: &mut Best<L, D, N>,
     ) {
-        let cell = at.cell.unwrap_or_else(|| {
-            std::array::from_fn(|a| {
+        let cell = match &at.cells {
+            Cells::Full(cell) => *cell,
+            Cells::Low(low) => std::array::from_fn(|a| {
                 let mut lo = [0u32; 8];
-                L::u_store(at.centre[a], &mut lo[..L::N]);
+                L::u_store(low[a], &mut lo[..L::N]);
                 lo.map(|t| i64::from(t as i32))
-            })
-        });
+            }),
+        };
         for r in 2..=MAX_SHELLS {
             for offset in shell::<D>(r) {
                 let t: [L::U; D] = std::array::from_fn(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
@@ -994,14 +992,11 @@ impl<const N: usize> Simd<4, N> {
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 mod runtime_avx2_tests {
     use super::*;
-    use crate::definition::splitmix64;
+    use crate::math::uniform;
 
     /// Point i of a seeded set, uniform in [−range, range]^D.
     fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
-        std::array::from_fn(|a| {
-            let u = (splitmix64(seed ^ splitmix64((i * D + a) as u64)) >> 11) as f64 / (1u64 << 53) as f64;
-            (2.0 * u - 1.0) * range
-        })
+        std::array::from_fn(|a| (2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * range)
     }
 
     fn same<const D: usize, const N: usize>(config: Config) {
@@ -1021,7 +1016,7 @@ mod runtime_avx2_tests {
                     points[batch % 8][0] = f64::NAN;
                 }
                 let located = kernel.locate::<Eight>(&points);
-                lanewise += usize::from(located.cell.is_some());
+                lanewise += usize::from(matches!(located.cells, Cells::Full(_)));
                 let plain = kernel.dispatch::<Eight>(&located);
                 // SAFETY: `runtime_avx2` returned true above.
                 #[allow(unsafe_code)]
