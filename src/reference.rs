@@ -22,8 +22,17 @@
 //!
 //! In [`Mode::Window`] step 3 is skipped. Ranks ([`Metric::rank`]: squared
 //! distances for Euclidean, the distance itself otherwise) are compared
-//! instead of distances, so no square root is taken per candidate. Ties keep
-//! the point found first.
+//! instead of distances, so no square root is taken per candidate.
+//!
+//! **Ties.** Points are ordered by rank, then by ID: of two points at the
+//! same rank the one with the smaller ID comes first, whatever order the
+//! cells are visited in. So that no point that ties F_n is missed, a cell is
+//! skipped only when its nearest possible point is strictly farther than
+//! F_n, and the search stops only when F_n is strictly inside B_r. Every
+//! evaluator of the crate follows this order, which is what lets paths that
+//! visit points in different orders give the same IDs and deltas. (Two
+//! distinct points with the same rank and the same ID, a chance of 2^−32
+//! among ties, are reported in visiting order.)
 //!
 //! ## Bad input
 //! A non-finite coordinate, or one with |x·S| > [`MAX_CELL_COORD`], gives
@@ -160,7 +169,7 @@ impl<const D: usize> Reference<D> {
         let f = fraction;
         let mut best = Nearest::<D>::new(order);
         let visit = |offset: [i64; D], best: &mut Nearest<D>| {
-            if metric.rank(&gaps(&f, &offset)) >= best.worst() {
+            if metric.rank(&gaps(&f, &offset)) > best.worst() {
                 return;
             }
             let neighbour = std::array::from_fn(|a| cell[a] + offset[a]);
@@ -177,7 +186,7 @@ impl<const D: usize> Reference<D> {
         }
         let mut r = 1;
         if self.config.mode == Mode::Exact {
-            while best.worst() > metric.rank_of_distance(outside_distance(&f, r)) {
+            while best.worst() >= metric.rank_of_distance(outside_distance(&f, r)) {
                 if r == MAX_SHELLS {
                     return best.finish(metric, self.pattern.scale(), r, true);
                 }
@@ -259,11 +268,12 @@ impl<const D: usize> Nearest<D> {
 
     #[inline]
     fn insert(&mut self, rank: f64, delta: [f64; D], id: u32) {
-        if rank >= self.worst() {
+        let last = self.order - 1;
+        if (rank, id) >= (self.rank[last], self.id[last]) {
             return;
         }
-        let mut i = self.order - 1;
-        while i > 0 && self.rank[i - 1] > rank {
+        let mut i = last;
+        while i > 0 && (self.rank[i - 1], self.id[i - 1]) > (rank, id) {
             self.rank[i] = self.rank[i - 1];
             self.delta[i] = self.delta[i - 1];
             self.id[i] = self.id[i - 1];

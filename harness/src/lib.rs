@@ -18,13 +18,16 @@
 //!   sampled F1 and the Poisson law P(F1 > r) = exp(−ρ·V·r^d), and the grid
 //!   bias (mean F1 at cell centres over mean F1 at cell corners, minus one);
 //! - **repeated strips**: cells whose hashes repeat along a run, against the
-//!   uniform-hash expectation ([`repeats`]).
+//!   uniform-hash expectation ([`repeats`]);
+//! - **grid identity**: grids through the coherent path against the
+//!   per-sample kernel, bit for bit ([`grids`]).
 //!
 //! Samples are drawn from a counter-based generator, so every figure is
 //! reproducible from the campaign's seed, and the parallel parts give the
 //! same counts on any number of threads.
 
 pub mod fuzz;
+pub mod grids;
 pub mod oracle;
 pub mod repeats;
 pub mod report;
@@ -57,6 +60,11 @@ pub trait Kernel<const D: usize>: Sync {
     /// whose largest |coordinate| is `magnitude` and whose F_k is `f`,
     /// counting the rounding of x·S as part of the error.
     fn error_bound(&self, magnitude: f64, f: f64) -> f64;
+    /// `grids` grids of the [`grids`] campaign against the kernel's own
+    /// per-sample results, for kernels with a grid path of their own.
+    fn grid_identity(&self, _seed: u64, _grids: usize, _range: f64) -> Option<grids::GridIdentity> {
+        None
+    }
 }
 
 impl<const D: usize> Kernel<D> for Reference<D> {
@@ -109,6 +117,9 @@ impl<const D: usize, const N: usize> Kernel<D> for worley::simd::Simd<D, N> {
     fn error_bound(&self, _magnitude: f64, f: f64) -> f64 {
         let cell = 1.0 / self.pattern().scale();
         4.0 * f32::EPSILON as f64 * (f + cell)
+    }
+    fn grid_identity(&self, seed: u64, grids: usize, range: f64) -> Option<grids::GridIdentity> {
+        Some(grids::grid_identity(self, seed, grids, range))
     }
 }
 
@@ -195,6 +206,8 @@ pub fn run<const D: usize, K: Kernel<D>>(kernel: &K, campaign: &Campaign) -> Rep
     let side = (campaign.grid_cells as f64).powf(1.0 / D as f64).floor().max(2.0) as i64;
     let keys = kernel.pattern().keys();
     report.repeats = Some(repeats::repeated_runs::<D>(side, |c| worley::definition::cell_hash(keys, c)));
+    // About one grid sample per oracle sample.
+    report.grids = kernel.grid_identity(campaign.seed, campaign.oracle_samples.div_ceil(400), campaign.range);
     report
 }
 

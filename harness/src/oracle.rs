@@ -3,9 +3,10 @@
 //! It shares only the definition ([`Pattern::for_each_point`]) and the
 //! metric's rank with the evaluators. There is no pruning and no insertion
 //! list: it gathers every point of the block of Chebyshev radius R (starting
-//! at R = 2, a 5^d block), sorts them all, and accepts the n-th closest only
-//! if it is no farther than the outside of that block; otherwise it starts
-//! again with R + 1.
+//! at R = 2, a 5^d block), sorts them all by rank and then by ID (the
+//! crate's order for ties), and accepts the n-th only if it is strictly
+//! closer than the outside of that block, so no point outside can tie it;
+//! otherwise it starts again with R + 1.
 
 use worley::config::Metric;
 use worley::definition::Pattern;
@@ -58,13 +59,13 @@ pub fn brute_force_in_cell<const D: usize>(
         if scratch.len() < order {
             continue;
         }
-        scratch.sort_by(|a, b| a.0.total_cmp(&b.0));
+        scratch.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
         // Distance from the sample to the outside of the block.
         let mut edge = f64::INFINITY;
         for &fa in &f {
             edge = edge.min(fa + r as f64).min((r + 1) as f64 - fa);
         }
-        if scratch[order - 1].0 <= metric.rank_of_distance(edge) {
+        if scratch[order - 1].0 < metric.rank_of_distance(edge) {
             let inv = 1.0 / pattern.scale();
             let mut out = Features::empty(order);
             out.shells = r as u32;

@@ -64,6 +64,9 @@ pub struct Report {
     /// Repeated strips of cells in a window around the origin (the cell
     /// hash against the uniform-hash expectation), when measured.
     pub repeats: Option<super::repeats::Repeats>,
+    /// Grids through the coherent path against the per-sample kernel, for
+    /// kernels that have both.
+    pub grids: Option<super::grids::GridIdentity>,
 }
 
 impl Report {
@@ -87,6 +90,7 @@ impl Report {
             straddled: 0,
             orders: vec![OrderReport::default(); config.order],
             repeats: None,
+            grids: None,
         }
     }
 
@@ -96,6 +100,7 @@ impl Report {
         self.orders
             .iter()
             .all(|o| o.oracle_disagreements == 0 && o.id_disagreements == 0 && o.continuity_violations == 0)
+            && self.grids.is_none_or(|g| g.differing == 0)
     }
 
     /// The report as pretty-printed JSON.
@@ -160,6 +165,13 @@ impl Report {
                 s,
                 "  cell hash, {} cells around the origin: {} repeated runs of two cells (a uniform hash: {:.1e}), {} equal cells (a uniform hash: {:.0})",
                 r.cells, r.equal_runs, r.expected_equal_runs, r.equal_cells, r.expected_equal_cells
+            );
+        }
+        if let Some(g) = &self.grids {
+            let _ = writeln!(
+                s,
+                "  grids: {} grids ({} on the coherent path), {} samples, {} differing in any bit from the per-sample kernel",
+                g.grids, g.coherent, g.samples, g.differing
             );
         }
         s

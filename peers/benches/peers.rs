@@ -14,6 +14,10 @@
 //! - fastnoise-lite `Cellular`: one jittered point per cell, scalar.
 //! - noise (noise-rs) `Worley`: f64, one point per cell from a fixed table.
 //!
+//! After criterion's groups, one round-robin run of every contestant in
+//! this process prints the headline table: median M samples/s of 9 rounds,
+//! with the ratios of ours to the peers, and the build flags.
+//!
 //! Peers get frequency 0.55 (cell side ≈ 1.8 units, the same feature
 //! density as ours); simdnoise's grid, which steps by 1 per sample, gets
 //! 0.55 · 0.125. Build flags decide everybody's SIMD path; quick-noise and
@@ -21,8 +25,9 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
+use std::time::Instant;
+use worley::{Config, Features32, Grid, Outputs, Simd};
 use worley_harness::sample_point;
-use worley::{Config, Features32, Outputs, Simd};
 
 const RANDOM: usize = 1 << 18;
 const SIDE: usize = 256;
@@ -47,6 +52,11 @@ fn ours<const N: usize>(c: &mut Criterion, random: &[[f32; 3]], grid: &[[f32; 3]
             b.iter(|| simd.evaluate_slice(black_box(pts), &mut out).unwrap());
         });
     }
+    let mut out = vec![Features32::<3, N> { distance: [0.0; N], delta: [[0.0; 3]; N], id: [0; N] }; SIDE * SIDE];
+    group.throughput(Throughput::Elements((SIDE * SIDE) as u64));
+    group.bench_function(BenchmarkId::new("worley-evaluate_grid", "grid"), |b| {
+        b.iter(|| simd.evaluate_grid(black_box(&grid_spec()), &mut out).unwrap());
+    });
     group.finish();
 }
 
@@ -99,12 +109,154 @@ fn peers(c: &mut Criterion, random: &[[f32; 3]], grid: &[[f32; 3]]) {
     group.finish();
 }
 
+/// The grid slice as a [`Grid`]: the same points as `points().1`.
+fn grid_spec() -> Grid<3> {
+    Grid { origin: [0.0, 0.0, 0.5], step: [STEP, STEP, 1.0], size: [SIDE, SIDE, 1] }
+}
+
+/// One contestant of the headline table: a name, the case, and a closure
+/// that evaluates the case's points once.
+struct Entry<'a> {
+    name: &'static str,
+    case: &'static str,
+    run: Box<dyn FnMut() + 'a>,
+    samples: usize,
+    rates: Vec<f64>,
+}
+
+/// Round-robin: every entry once per round, 9 rounds, medians.
+fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
+    use quick_noise::simd::SimdSliceIterExt;
+    let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    let f2 = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
+    let f2_ids = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    let f4 = Simd::<3, 4>::new(Config { order: 4, ..Config::default() }, Outputs::Distances).unwrap();
+    let spec = grid_spec();
+    let n = grid.len();
+    let axes = |pts: &[[f32; 3]]| -> [Vec<f32>; 3] { std::array::from_fn(|a| pts.iter().map(|p| p[a]).collect()) };
+    let (gx, rx) = (axes(grid), axes(random));
+    let quick = |xs: &[Vec<f32>; 3], out: &mut [f32]| {
+        quick_noise::BatchNoise::<3, quick_noise::Fbm, quick_noise::Cellular>::builder(
+            xs[0].simd_iter_static(),
+            xs[1].simd_iter_static(),
+            xs[2].simd_iter_static(),
+        )
+        .octaves(1)
+        .frequency(FREQUENCY)
+        .fill(black_box(out))
+    };
+    let freq = FREQUENCY * STEP as f32;
+    let (mut o1, mut o2, mut o2i, mut o4) = (
+        vec![Features32::<3, 1> { distance: [0.0; 1], delta: [[0.0; 3]; 1], id: [0; 1] }; n],
+        vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; n],
+        vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; n],
+        vec![Features32::<3, 4> { distance: [0.0; 4], delta: [[0.0; 3]; 4], id: [0; 4] }; n],
+    );
+    let (mut qg, mut qr, mut crackle) = (vec![0f32; n], vec![0f32; random.len()], vec![0f32; n]);
+    let mut slice_out = vec![Features32::<3, 1> { distance: [0.0; 1], delta: [[0.0; 3]; 1], id: [0; 1] }; random.len()];
+    let mut entries: Vec<Entry> = Vec::new();
+    fn add<'a>(
+        entries: &mut Vec<Entry<'a>>,
+        name: &'static str,
+        case: &'static str,
+        samples: usize,
+        run: Box<dyn FnMut() + 'a>,
+    ) {
+        entries.push(Entry { name, case, run, samples, rates: Vec::new() })
+    }
+    add(&mut entries, "quick-noise 0.3 F1", "grid F1", n, Box::new(|| quick(&gx, &mut qg)));
+    add(
+        &mut entries,
+        "simdnoise 3.1 F1",
+        "grid F1",
+        n,
+        Box::new(|| {
+            black_box(simdnoise::NoiseBuilder::cellular_3d(SIDE, SIDE, 1).with_freq(freq).generate());
+        }),
+    );
+    add(
+        &mut entries,
+        "simdnoise 3.1 F2−F1",
+        "grid F2−F1",
+        n,
+        Box::new(|| {
+            black_box(simdnoise::NoiseBuilder::cellular2_3d(SIDE, SIDE, 1).with_freq(freq).generate());
+        }),
+    );
+    add(&mut entries, "quick-noise 0.3 F1", "random F1", random.len(), Box::new(|| quick(&rx, &mut qr)));
+    add(&mut entries, "worley evaluate_grid F1", "grid F1", n, Box::new(|| f1.evaluate_grid(&spec, &mut o1).unwrap()));
+    add(
+        &mut entries,
+        "worley evaluate_grid F2−F1",
+        "grid F2−F1",
+        n,
+        Box::new(|| {
+            f2.evaluate_grid(&spec, &mut o2).unwrap();
+            for (c, f) in crackle.iter_mut().zip(&o2) {
+                *c = f.distance[1] - f.distance[0];
+            }
+            black_box(&crackle);
+        }),
+    );
+    add(
+        &mut entries,
+        "worley evaluate_grid F2, IDs and deltas",
+        "grid F2 + IDs",
+        n,
+        Box::new(|| f2_ids.evaluate_grid(&spec, &mut o2i).unwrap()),
+    );
+    add(&mut entries, "worley evaluate_grid F4", "grid F4", n, Box::new(|| f4.evaluate_grid(&spec, &mut o4).unwrap()));
+    add(
+        &mut entries,
+        "worley evaluate_slice F1",
+        "random F1",
+        random.len(),
+        Box::new(|| f1.evaluate_slice(black_box(random), &mut slice_out).unwrap()),
+    );
+    for _ in 0..9 {
+        for e in entries.iter_mut() {
+            let start = Instant::now();
+            (e.run)();
+            e.rates.push(e.samples as f64 / start.elapsed().as_secs_f64() / 1e6);
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let medians: Vec<(&str, &str, f64)> = entries.iter_mut().map(|e| (e.name, e.case, median(&mut e.rates))).collect();
+    let of = |name: &str, case: &str| medians.iter().find(|m| m.0 == name && m.1 == case).map(|m| m.2);
+    println!();
+    println!("3D, one thread, same points at the same feature density; median M samples/s of 9 round-robin rounds");
+    println!(
+        "build: RUSTFLAGS={:?}; compiled with avx2: {}, fma: {}, avx512f: {}; worley runs: {}",
+        std::env::var("RUSTFLAGS").unwrap_or_default(),
+        cfg!(target_feature = "avx2"),
+        cfg!(target_feature = "fma"),
+        cfg!(target_feature = "avx512f"),
+        worley::simd_level()
+    );
+    println!("| case | contestant | M samples/s | / quick-noise F1 | / simdnoise |");
+    println!("|---|---|---|---|---|");
+    for (name, case, rate) in &medians {
+        let quick_ref = of("quick-noise 0.3 F1", if case.starts_with("random") { "random F1" } else { "grid F1" });
+        let simd_ref = match *case {
+            "grid F1" => of("simdnoise 3.1 F1", "grid F1"),
+            "grid F2−F1" => of("simdnoise 3.1 F2−F1", "grid F2−F1"),
+            _ => None,
+        };
+        let ratio = |r: Option<f64>| r.map_or("".to_string(), |r| format!("{:.2}", rate / r));
+        println!("| {case} | {name} | {rate:.1} | {} | {} |", ratio(quick_ref), ratio(simd_ref));
+    }
+}
+
 fn benches(c: &mut Criterion) {
     println!("SIMD level: {}", worley::simd_level());
     let (random, grid) = points();
     ours::<1>(c, &random, &grid);
     ours::<2>(c, &random, &grid);
     peers(c, &random, &grid);
+    headline(&random, &grid);
 }
 
 criterion_group!(peers_group, benches);

@@ -222,7 +222,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        self.grid_range(grid, 0, out);
+        if !self.grid_coherent(grid, out, false) {
+            self.grid_range(grid, 0, out);
+        }
         Ok(())
     }
 
@@ -248,7 +250,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        out.par_chunks_mut(TILE).enumerate().for_each(|(t, dst)| self.grid_range(grid, t * TILE, dst));
+        if !self.grid_coherent(grid, out, true) {
+            out.par_chunks_mut(TILE).enumerate().for_each(|(t, dst)| self.grid_range(grid, t * TILE, dst));
+        }
         Ok(())
     }
 
@@ -266,7 +270,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 
     /// Eight samples into up to eight results.
     #[inline]
-    fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
+    pub(super) fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
         let r = self.evaluate8(block);
         let distance = r.distance.map(|v| v.to_array());
         let id = r.id.map(|v| v.to_array());

@@ -51,12 +51,20 @@ pub trait Lanes: Copy + 'static {
     fn sqrt(a: Self::F) -> Self::F;
     /// a < b
     fn lt(a: Self::F, b: Self::F) -> Self::M;
+    /// `a <= b` per lane (false where either is NaN).
+    fn le(a: Self::F, b: Self::F) -> Self::M;
+    /// `a == b` per lane (false where either is NaN).
+    fn eq(a: Self::F, b: Self::F) -> Self::M;
+    /// Unsigned `a < b` per lane.
+    fn u_lt(a: Self::U, b: Self::U) -> Self::M;
     /// m ? a : b
     fn select(m: Self::M, a: Self::F, b: Self::F) -> Self::F;
     /// m ? a : b
     fn select_u(m: Self::M, a: Self::U, b: Self::U) -> Self::U;
     /// a ∧ b
     fn and(a: Self::M, b: Self::M) -> Self::M;
+    /// Either condition.
+    fn or(a: Self::M, b: Self::M) -> Self::M;
     /// Any lane true.
     fn any(m: Self::M) -> bool;
 
@@ -161,6 +169,18 @@ impl Lanes for One {
         a < b
     }
     #[inline(always)]
+    fn le(a: f32, b: f32) -> bool {
+        a <= b
+    }
+    #[inline(always)]
+    fn eq(a: f32, b: f32) -> bool {
+        a == b
+    }
+    #[inline(always)]
+    fn u_lt(a: u32, b: u32) -> bool {
+        a < b
+    }
+    #[inline(always)]
     fn select(m: bool, a: f32, b: f32) -> f32 {
         if m {
             a
@@ -179,6 +199,10 @@ impl Lanes for One {
     #[inline(always)]
     fn and(a: bool, b: bool) -> bool {
         a & b
+    }
+    #[inline(always)]
+    fn or(a: bool, b: bool) -> bool {
+        a | b
     }
     #[inline(always)]
     fn any(m: bool) -> bool {
@@ -294,6 +318,21 @@ impl Lanes for Eight {
         a.simd_lt(b)
     }
     #[inline(always)]
+    fn le(a: f32x8, b: f32x8) -> f32x8 {
+        a.simd_le(b)
+    }
+    #[inline(always)]
+    fn eq(a: f32x8, b: f32x8) -> f32x8 {
+        a.simd_eq(b)
+    }
+    #[inline(always)]
+    fn u_lt(a: u32x8, b: u32x8) -> f32x8 {
+        // Unsigned order is signed order with the top bit flipped.
+        let flip = u32x8::splat(0x8000_0000);
+        let (x, y): (i32x8, i32x8) = (bytemuck::cast(a ^ flip), bytemuck::cast(b ^ flip));
+        bytemuck::cast(x.simd_lt(y))
+    }
+    #[inline(always)]
     fn select(m: f32x8, a: f32x8, b: f32x8) -> f32x8 {
         m.select(a, b)
     }
@@ -304,6 +343,10 @@ impl Lanes for Eight {
     #[inline(always)]
     fn and(a: f32x8, b: f32x8) -> f32x8 {
         a & b
+    }
+    #[inline(always)]
+    fn or(a: f32x8, b: f32x8) -> f32x8 {
+        a | b
     }
     #[inline(always)]
     fn any(m: f32x8) -> bool {

@@ -51,6 +51,16 @@
 //! - **Batches** ([`batch`]): slices of any [`Point`] type, regular
 //!   [`Grid`]s, rayon tiles (feature `parallel`) and points given as a cell
 //!   plus a fraction for large worlds.
+//! - **Grids share their cells.** [`Simd::evaluate_grid`] generates the
+//!   points of a band of rows once and evaluates tiles of 8 × 8 samples
+//!   against the few points that can matter to the tile, each broadcast to
+//!   every lane; lanes it cannot certify take the per-sample kernel
+//!   ([`Simd::coherent_grid`] says when the path applies). Deltas are
+//!   computed exactly as the per-sample kernel computes them, so a grid
+//!   sample is that kernel's result bit for bit.
+//! - **Ties** are ordered by ID: of two points at the same rank the one with
+//!   the smaller ID comes first (see [`reference`](crate::reference)), so
+//!   paths that meet points in different orders agree on IDs and deltas.
 //!
 //! ## Build flags
 //! `wide` chooses its instructions at compile time only. Build with
@@ -73,6 +83,7 @@
 //! metric is the one the speed figures are about.
 
 pub mod batch;
+mod coherent;
 pub mod lanes;
 pub mod periodic;
 
@@ -463,6 +474,17 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev>(Chebyshev, o, at),
             (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski>(Minkowski(p), o, at),
         };
+        self.finish::<L>(&mut best);
+        if at.valid[..L::N].iter().any(|v| !v) {
+            mark_invalid(&mut best, &at.valid);
+        }
+        best
+    }
+
+    /// Ranks in lane units to distances in user units, and deltas to user
+    /// units: the last step of every path.
+    #[inline(always)]
+    fn finish<L: Lanes>(&self, best: &mut Best<L, D, N>) {
         let (unit, inv) = (L::f(1.0 / UNIT), L::f(self.inv_scale));
         let metric = self.config.metric;
         for k in 0..N {
@@ -471,10 +493,6 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 best.delta[k][a] = L::mul(L::mul(best.delta[k][a], unit), inv);
             }
         }
-        if at.valid[..L::N].iter().any(|v| !v) {
-            mark_invalid(&mut best, &at.valid);
-        }
-        best
     }
 
     /// The kernels of the other metrics, kept out of line: a default
@@ -504,8 +522,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         metric: M,
         at: &Located<L, D>,
     ) -> Best<L, D, N> {
-        let mut best =
-            Best::<L, D, N> { rank: [L::f(f32::INFINITY); N], delta: [[L::f(0.0); D]; N], id: [L::u(INVALID_ID); N] };
+        let mut best = Best::<L, D, N>::empty();
         let one = L::f(UNIT);
         // Per axis, indexed by the mirrored offset + 1 (near, own, far): the
         // axis word, the sample minus the cell's corner, and the metric's
@@ -539,7 +556,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 for g in &gap[1..] {
                     nearest_far = L::min(nearest_far, g[2]);
                 }
-                if !L::any(L::lt(nearest_far, best.rank[N - 1])) {
+                if !L::any(may_enter::<L, IDS>(nearest_far, best.rank[N - 1])) {
                     break;
                 }
             }
@@ -551,7 +568,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 for a in 1..D {
                     rank = metric.fold::<L>(rank, gap[a][index[a]]);
                 }
-                L::lt(rank, best.rank[N - 1])
+                may_enter::<L, IDS>(rank, best.rank[N - 1])
             };
             if !L::any(needs) {
                 continue;
@@ -562,7 +579,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             self.visit::<L, M, IDS, DELTAS>(metric, h, sh, needs, &mut best);
         }
         if self.config.mode == Mode::Exact {
-            let open = L::lt(metric.rank_of_distance::<L>(outside::<L, D>(&at.f, UNIT)), best.rank[N - 1]);
+            let open =
+                may_enter::<L, IDS>(metric.rank_of_distance::<L>(outside::<L, D>(&at.f, UNIT)), best.rank[N - 1]);
             if L::any(open) {
                 self.widen::<L, M, IDS, DELTAS>(metric, at, open, &mut best);
             }
@@ -600,14 +618,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                         L::f(0.0)
                     }
                 });
-                let needs = L::and(open, L::lt(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
+                let needs = L::and(open, may_enter::<L, IDS>(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
                 if L::any(needs) {
                     let sh: [L::F; D] = std::array::from_fn(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
                     self.visit::<L, M, IDS, DELTAS>(metric, self.hash::<L>(t), sh, needs, best);
                 }
             }
             let edge = metric.rank_of_distance::<L>(outside::<L, D>(&at.f, r as f32 * UNIT));
-            open = L::and(open, L::lt(edge, best.rank[N - 1]));
+            open = L::and(open, may_enter::<L, IDS>(edge, best.rank[N - 1]));
             if !L::any(open) {
                 return;
             }
@@ -668,8 +686,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             let id = if IDS {
                 let (am, cm) = p.id;
                 // The sentinel state is reported as INVALID_ID − 1
-                // (`definition::feature_id`): an unsigned minimum.
-                L::u_min(L::u_add(L::u_mul(h, L::u(am)), L::u(cm)), L::u(INVALID_ID - 1))
+                // (`definition::feature_id`): an unsigned minimum. Lanes
+                // without the point carry INVALID_ID, which loses every tie.
+                let id = L::u_min(L::u_add(L::u_mul(h, L::u(am)), L::u(cm)), L::u(INVALID_ID - 1));
+                L::select_u(active, id, L::u(INVALID_ID))
             } else {
                 L::u(0)
             };
@@ -736,13 +756,27 @@ fn word<L: Lanes>(axis: usize, t: L::U) -> L::U {
 }
 
 impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
+    /// No candidate yet: ranks +∞, zero deltas, [`INVALID_ID`].
+    #[inline(always)]
+    fn empty() -> Self {
+        Best { rank: [L::f(f32::INFINITY); N], delta: [[L::f(0.0); D]; N], id: [L::u(INVALID_ID); N] }
+    }
+
     /// Inserts one candidate per lane (rank +∞ in lanes that have none).
-    /// Ties keep the earlier point, as in the reference.
+    /// With IDs the order is the crate's canonical one, rank then ID (see
+    /// [`reference`](crate::reference)), so the result does not depend on
+    /// the order points arrive in; a lane without a candidate must then
+    /// carry [`INVALID_ID`], which nothing precedes. Without IDs only the
+    /// sorted ranks are reported, and those do not depend on the order.
     #[inline(always)]
     fn insert<const IDS: bool, const DELTAS: bool>(&mut self, rank: L::F, delta: [L::F; D], id: L::U) {
         let (mut r, mut d, mut i) = (rank, delta, id);
         for k in 0..N {
-            let lt = L::lt(r, self.rank[k]);
+            let lt = if IDS {
+                L::or(L::lt(r, self.rank[k]), L::and(L::eq(r, self.rank[k]), L::u_lt(i, self.id[k])))
+            } else {
+                L::lt(r, self.rank[k])
+            };
             let kept = self.rank[k];
             self.rank[k] = L::select(lt, r, kept);
             r = L::select(lt, kept, r);
@@ -759,6 +793,18 @@ impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
                 i = L::select_u(lt, kept, i);
             }
         }
+    }
+}
+
+/// Whether a candidate at rank `bound` or beyond may still enter the list
+/// whose last rank is `last`: strictly below without IDs, and also at equal
+/// rank with IDs, where a tie is decided by the ID.
+#[inline(always)]
+fn may_enter<L: Lanes, const IDS: bool>(bound: L::F, last: L::F) -> L::M {
+    if IDS {
+        L::le(bound, last)
+    } else {
+        L::lt(bound, last)
     }
 }
 

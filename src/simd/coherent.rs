@@ -1,0 +1,701 @@
+//! # The coherent path: samples close together share their cells' points
+//!
+//! A grid's neighbouring samples need the same few cells. Instead of
+//! hashing and generating those cells again for every sample, this path
+//! generates every cell of a band of the grid once ([`Region`]: the points as
+//! struct-of-arrays, with their IDs), then evaluates *tiles* of 8 × [`K`]
+//! samples (eight along axis 0 in each vector, `K` rows) against the points
+//! that can matter to the tile, each point broadcast to every lane.
+//!
+//! ## Why the bits are the per-sample path's
+//! - A lane computes a candidate's delta exactly as the per-sample kernel
+//!   does: the sample's fraction minus the candidate cell's offset from the
+//!   sample's own cell (an exact multiple of [`UNIT`]), minus the point's
+//!   24-bit coordinate. The tile's frame is used only to choose candidates,
+//!   never for a result.
+//! - Ranks, the insertion and the final scaling are the same functions.
+//! - Points are ordered by rank and then by ID (see
+//!   [`reference`](crate::reference)), so the order in which a path meets
+//!   the points does not matter: only which points it meets.
+//!
+//! ## Why every point that matters is met
+//! - **The bound.** For the n points of the tile's own cells whose farthest
+//!   distance from the tile's bounding box is smallest, that farthest
+//!   distance U bounds F_n of every sample in the tile.
+//! - **The candidates.** Of the cells within one cell of the tile's cells,
+//!   a cell whose box is farther than U from the tile's box is skipped, and
+//!   so is a point farther than U from it. Both tests are made with U
+//!   inflated twice by [`SLACK_REL`] and [`SLACK_ABS`], far more than the
+//!   rounding of any f32 quantity here, so a skipped point is strictly
+//!   farther than any lane's F_n.
+//! - **The certificate.** A lane is certified when its F_n is within U
+//!   inflated once (so the skipped points cannot reach it) and strictly
+//!   inside the distance from the lane to the outside of the cells searched,
+//!   deflated by the same slack. A lane that is not certified is evaluated
+//!   by the per-sample kernel, which is exact on its own.
+//!
+//! ## When it runs
+//! [`Simd::evaluate_grid`] and [`Simd::evaluate_grid_parallel`] take it in
+//! [`Mode::Exact`] when eight steps along axis 0 span at most one cell, every
+//! coordinate of the grid is valid, and the band's cells are not many more
+//! than its samples. A tile whose samples span more than two cells on some
+//! axis (rows far apart) takes the per-sample kernel.
+
+use wide::{f32x8, u32x8};
+
+use super::lanes::{Eight, Lanes, One};
+use super::{
+    distance_of_rank, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski, Outputs,
+    Simd, UNIT,
+};
+use crate::config::{Metric, Mode};
+use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
+
+/// Vectors per tile: a tile is 8 samples along axis 0 times `K` rows.
+pub(super) const K: usize = 8;
+/// Rows of a grid per band; a band's cells are generated once.
+const BAND: usize = 32;
+/// Relative slack of the candidate and certificate tests.
+const SLACK_REL: f32 = 1.0 / 256.0;
+/// Absolute slack of the same tests, in lane units (2^−24 cells).
+const SLACK_ABS: f32 = 16.0;
+
+/// The feature points of a box of cells, generated once, as
+/// struct-of-arrays: cell i's points are `start[i]..start[i + 1]`, cells
+/// numbered with axis 0 fastest.
+pub(super) struct Region<const D: usize> {
+    origin: [i64; D],
+    side: [usize; D],
+    start: Vec<u32>,
+    /// Fixed-point coordinates (the 24-bit integers, exact in f32), padded
+    /// by eight so that a group of eight read from any cell stays in bounds.
+    q: [Vec<f32>; D],
+    id: Vec<u32>,
+}
+
+impl<const D: usize> Region<D> {
+    /// The points of the cells `lo ..= hi` (inclusive per axis).
+    fn generate<const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D]) -> Self {
+        let side: [usize; D] = std::array::from_fn(|a| (hi[a] - lo[a] + 1) as usize);
+        let cells: usize = side.iter().product();
+        // The axis words of each row of cells, mixed once per axis value.
+        let words: [Vec<u32>; D] =
+            std::array::from_fn(|a| (0..side[a]).map(|i| axis_word(a, axis_term(lo[a] + i as i64))).collect());
+        let keys = simd.pattern.keys();
+        let table = simd.pattern.table();
+        let guess = cells * (table.mean().ceil() as usize + 1) + 8;
+        let mut start = Vec::with_capacity(cells + 1);
+        let mut q: [Vec<f32>; D] = std::array::from_fn(|_| Vec::with_capacity(guess));
+        let mut id = Vec::with_capacity(guess);
+        let mut index = [0usize; D];
+        for _ in 0..cells {
+            start.push(id.len() as u32);
+            let w: [u32; D] = std::array::from_fn(|a| words[a][index[a]]);
+            let h = hash_words(keys, &w);
+            for p in &simd.points[..table.population(h) as usize] {
+                id.push(feature_id(p.id.0.wrapping_mul(h).wrapping_add(p.id.1)));
+                for (qa, (m, c)) in q.iter_mut().zip(p.coordinate) {
+                    qa.push((m.wrapping_mul(h).wrapping_add(c) >> 8) as f32);
+                }
+            }
+            for a in 0..D {
+                index[a] += 1;
+                if index[a] < side[a] {
+                    break;
+                }
+                index[a] = 0;
+            }
+        }
+        start.push(id.len() as u32);
+        for qa in &mut q {
+            qa.resize(qa.len() + 8, 0.0);
+        }
+        Region { origin: lo, side, start, q, id }
+    }
+
+    /// The index of cell `c`, which must lie in the region.
+    #[inline(always)]
+    fn cell(&self, c: [i64; D]) -> usize {
+        let mut i = 0;
+        for a in (0..D).rev() {
+            i = i * self.side[a] + (c[a] - self.origin[a]) as usize;
+        }
+        i
+    }
+}
+
+/// One tile of samples, 8 × [`K`] lanes, in the frame of its `reference`
+/// cell (the smallest cell of its lanes on every axis).
+struct Tile<const D: usize> {
+    /// Each lane's fraction in its own cell, lane units.
+    f: [[f32x8; D]; K],
+    /// Each lane's cell minus the reference, times [`UNIT`] (exact).
+    cl: [[f32x8; D]; K],
+    reference: [i64; D],
+    /// The lanes' cells: largest per axis (the smallest is the reference).
+    hi: [i64; D],
+    /// The bounding box of the lanes in the tile's frame, lane units.
+    blo: [f32; D],
+    bhi: [f32; D],
+}
+
+/// A distance (lane units) grown by the slack.
+#[inline(always)]
+fn inflate(d: f32) -> f32 {
+    d * (1.0 + SLACK_REL) + SLACK_ABS
+}
+
+/// The grid's coordinates per axis, located once: cell and fraction (lane
+/// units) of every index.
+struct Axes<const D: usize> {
+    cell: [Vec<i64>; D],
+    f: [Vec<f32>; D],
+}
+
+impl<const D: usize, const N: usize> Simd<D, N> {
+    /// Whether [`Simd::evaluate_grid`] takes the coherent path for `grid`:
+    /// [`Mode::Exact`], eight steps along axis 0 within one cell
+    /// (`8·|step[0]|·S ≤ 1`, S the [scale](crate::Pattern::scale)) and every
+    /// coordinate valid. The results are the same bits either way; only the
+    /// speed differs.
+    ///
+    /// ```
+    /// use worley::{Config, Grid, Mode, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let image = Grid { origin: [0.0, 0.0], step: [0.05, 0.05], size: [64, 64] };
+    /// assert!(basis.coherent_grid(&image));
+    /// // Samples a cell or more apart share nothing.
+    /// assert!(!basis.coherent_grid(&Grid { step: [5.0, 5.0], ..image }));
+    /// let window = Simd::<2, 1>::new(Config { mode: Mode::Window, ..Config::default() }, Outputs::Distances).unwrap();
+    /// assert!(!window.coherent_grid(&image));
+    /// ```
+    pub fn coherent_grid(&self, grid: &Grid<D>) -> bool {
+        self.grid_axes(grid).is_some()
+    }
+
+    /// Locates every coordinate of the grid, as [`Simd::locate`] would;
+    /// `None` if one is invalid or the grid does not suit the path.
+    fn grid_axes(&self, grid: &Grid<D>) -> Option<Axes<D>> {
+        let scale = self.pattern.scale();
+        let tile_width = grid.step[0].abs() * scale * 8.0;
+        if self.config.mode != Mode::Exact || tile_width.is_nan() || tile_width > 1.0 {
+            return None;
+        }
+        let mut cell: [Vec<i64>; D] = std::array::from_fn(|_| Vec::new());
+        let mut f: [Vec<f32>; D] = std::array::from_fn(|_| Vec::new());
+        for a in 0..D {
+            for i in 0..grid.size[a] {
+                let u = (grid.origin[a] + grid.step[a] * i as f64) * scale;
+                if u.is_nan() || u.abs() > MAX_CELL_COORD {
+                    return None;
+                }
+                let floor = u.floor();
+                cell[a].push(floor as i64);
+                f[a].push((u - floor) as f32 * UNIT);
+            }
+        }
+        Some(Axes { cell, f })
+    }
+
+    /// [`Simd::evaluate_grid`] by bands of [`BAND`] rows on the coherent
+    /// path, serially or on all cores; false (nothing written) if the grid
+    /// does not suit it.
+    pub(super) fn grid_coherent(&self, grid: &Grid<D>, out: &mut [Features32<D, N>], parallel: bool) -> bool {
+        let Some(axes) = self.grid_axes(grid) else {
+            return false;
+        };
+        let width = grid.size[0];
+        if width == 0 || out.is_empty() {
+            return true;
+        }
+        let band = |(b, dst): (usize, &mut [Features32<D, N>])| self.band(grid, &axes, b * BAND, dst);
+        #[cfg(feature = "parallel")]
+        if parallel {
+            use rayon::prelude::*;
+            out.par_chunks_mut(BAND * width).enumerate().for_each(band);
+            return true;
+        }
+        let _ = parallel;
+        out.chunks_mut(BAND * width).enumerate().for_each(band);
+        true
+    }
+
+    /// Rows `first..` of the grid into `out` (whole rows).
+    fn band(&self, grid: &Grid<D>, axes: &Axes<D>, first: usize, out: &mut [Features32<D, N>]) {
+        let width = grid.size[0];
+        let rows = out.len() / width;
+        let row_cells = |r: usize| -> [i64; D] {
+            let mut rest = first + r;
+            std::array::from_fn(|a| {
+                if a == 0 {
+                    return 0;
+                }
+                let i = rest % grid.size[a];
+                rest /= grid.size[a];
+                axes.cell[a][i]
+            })
+        };
+        let (x_lo, x_hi) = min_max(&axes.cell[0]);
+        let mut lo = [i64::MAX; D];
+        let mut hi = [i64::MIN; D];
+        (lo[0], hi[0]) = (x_lo, x_hi);
+        for r in 0..rows {
+            let c = row_cells(r);
+            for a in 1..D {
+                lo[a] = lo[a].min(c[a]);
+                hi[a] = hi[a].max(c[a]);
+            }
+        }
+        let lo = lo.map(|v| v - 1);
+        let hi = hi.map(|v| v + 1);
+        let cells = (0..D).try_fold(1u128, |n, a| n.checked_mul((hi[a] - lo[a] + 1) as u128));
+        if cells.is_none_or(|n| n > 4 * out.len() as u128 + 256) {
+            // Rows far apart: generating their cells would cost more than
+            // it saves.
+            self.rows_per_sample(grid, first, out);
+            return;
+        }
+        let region = Region::generate(self, lo, hi);
+        match (self.config.metric, self.outputs) {
+            (Metric::Euclidean, o) => self.tiles_euclid(o, grid, axes, first, &region, out),
+            (Metric::Manhattan, o) => self.tiles_outputs(Manhattan, o, grid, axes, first, &region, out),
+            (Metric::Chebyshev, o) => self.tiles_outputs(Chebyshev, o, grid, axes, first, &region, out),
+            (Metric::Minkowski(p), o) => self.tiles_outputs(Minkowski(p), o, grid, axes, first, &region, out),
+        }
+    }
+
+    /// The Euclidean tile loops, recompiled for AVX2 when this build lacks
+    /// it and the CPU has it, as [`Simd::dispatch8`] does for the
+    /// per-sample kernel: the same operations, so the same bits.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn tiles_euclid(
+        &self,
+        o: Outputs,
+        grid: &Grid<D>,
+        axes: &Axes<D>,
+        first: usize,
+        region: &Region<D>,
+        out: &mut [Features32<D, N>],
+    ) {
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if super::runtime_avx2() {
+            // SAFETY: `tiles_avx2` requires AVX2 and nothing else, and
+            // `runtime_avx2` has just seen the CPU report it.
+            #[allow(unsafe_code)]
+            return unsafe { self.tiles_avx2(o, grid, axes, first, region, out) };
+        }
+        self.tiles_for(Euclid, o, grid, axes, first, region, out)
+    }
+
+    /// [`Simd::tiles_euclid`]'s loops compiled with AVX2 enabled.
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+    #[target_feature(enable = "avx2")]
+    #[allow(clippy::too_many_arguments)]
+    fn tiles_avx2(
+        &self,
+        o: Outputs,
+        grid: &Grid<D>,
+        axes: &Axes<D>,
+        first: usize,
+        region: &Region<D>,
+        out: &mut [Features32<D, N>],
+    ) {
+        self.tiles_for(Euclid, o, grid, axes, first, region, out)
+    }
+
+    /// The tile loop for the outputs asked for.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn tiles_for<M: Metric32>(
+        &self,
+        m: M,
+        o: Outputs,
+        grid: &Grid<D>,
+        axes: &Axes<D>,
+        first: usize,
+        region: &Region<D>,
+        out: &mut [Features32<D, N>],
+    ) {
+        match o {
+            Outputs::Distances => self.tiles::<M, false, false>(m, grid, axes, first, region, out),
+            Outputs::Ids => self.tiles::<M, true, false>(m, grid, axes, first, region, out),
+            Outputs::IdsAndDeltas => self.tiles::<M, true, true>(m, grid, axes, first, region, out),
+        }
+    }
+
+    /// The other metrics' tile loops, out of line (as `search_outputs`).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    fn tiles_outputs<M: Metric32>(
+        &self,
+        m: M,
+        o: Outputs,
+        grid: &Grid<D>,
+        axes: &Axes<D>,
+        first: usize,
+        region: &Region<D>,
+        out: &mut [Features32<D, N>],
+    ) {
+        self.tiles_for(m, o, grid, axes, first, region, out)
+    }
+
+    /// Grid rows `first..` by the per-sample kernel.
+    fn rows_per_sample(&self, grid: &Grid<D>, first: usize, out: &mut [Features32<D, N>]) {
+        let start = first * grid.size[0];
+        for (c, dst) in out.chunks_mut(8).enumerate() {
+            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + c * 8 + i.min(dst.len() - 1)));
+            self.write8(&block, dst);
+        }
+    }
+
+    /// Every tile of a band.
+    #[inline(always)]
+    fn tiles<M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        grid: &Grid<D>,
+        axes: &Axes<D>,
+        first: usize,
+        region: &Region<D>,
+        out: &mut [Features32<D, N>],
+    ) {
+        let width = grid.size[0];
+        let rows = out.len() / width;
+        // Axis 0 as lanes: each sample's cell relative to the band's first
+        // cell, times UNIT (exact), and its fraction; padded with the last
+        // sample so that eight lanes can be read from any x.
+        let base = region.origin[0];
+        let pad = |v: &mut Vec<f32>| v.resize(width + 8, v[width - 1]);
+        let mut x_cell: Vec<f32> = axes.cell[0].iter().map(|&c| (c - base) as f32 * UNIT).collect();
+        let mut x_f = axes.f[0].clone();
+        pad(&mut x_cell);
+        pad(&mut x_f);
+        let row_at = |r: usize| -> ([i64; D], [f32; D]) {
+            let mut rest = first + r;
+            let mut c = [0i64; D];
+            let mut f = [0f32; D];
+            for a in 1..D {
+                let i = rest % grid.size[a];
+                rest /= grid.size[a];
+                c[a] = axes.cell[a][i];
+                f[a] = axes.f[a][i];
+            }
+            (c, f)
+        };
+        for r0 in (0..rows).step_by(K) {
+            let rows_here = (rows - r0).min(K);
+            let rk: [([i64; D], [f32; D]); K] = std::array::from_fn(|k| row_at(r0 + k.min(rows_here - 1)));
+            // The rows' part of every tile: reference cell, span and box on
+            // the axes other than 0.
+            let mut reference = [0i64; D];
+            let mut hi = [0i64; D];
+            let mut blo = [0f32; D];
+            let mut bhi = [0f32; D];
+            let mut far_apart = false;
+            for a in 1..D {
+                reference[a] = rk.iter().map(|r| r.0[a]).min().unwrap_or(0);
+                hi[a] = rk.iter().map(|r| r.0[a]).max().unwrap_or(0);
+                far_apart |= hi[a] - reference[a] > 1;
+                let pos = |r: &([i64; D], [f32; D])| (r.0[a] - reference[a]) as f32 * UNIT + r.1[a];
+                blo[a] = rk.iter().map(pos).fold(f32::INFINITY, f32::min);
+                bhi[a] = rk.iter().map(pos).fold(f32::NEG_INFINITY, f32::max);
+            }
+            let mut tile = Tile { f: [[f32x8::ZERO; D]; K], cl: [[f32x8::ZERO; D]; K], reference, hi, blo, bhi };
+            for ((f, cl), (c, fr)) in tile.f.iter_mut().zip(&mut tile.cl).zip(&rk) {
+                for a in 1..D {
+                    f[a] = f32x8::splat(fr[a]);
+                    cl[a] = f32x8::splat((c[a] - reference[a]) as f32 * UNIT);
+                }
+            }
+            let mut best: [Best<Eight, D, N>; K] = std::array::from_fn(|_| Best::empty());
+            for x0 in (0..width).step_by(8) {
+                let cols_here = (width - x0).min(8);
+                let (first_x, last_x) = (x0, x0 + cols_here - 1);
+                let (c0, c1) = (axes.cell[0][first_x], axes.cell[0][last_x]);
+                tile.reference[0] = c0.min(c1);
+                tile.hi[0] = c0.max(c1);
+                if far_apart || tile.hi[0] - tile.reference[0] > 1 {
+                    for k in 0..rows_here {
+                        let o = (r0 + k) * width + x0;
+                        let start = (first + r0 + k) * width + x0;
+                        let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + i.min(cols_here - 1)));
+                        self.write8(&block, &mut out[o..o + cols_here]);
+                    }
+                    continue;
+                }
+                // Cells along axis 0 are monotone in x: the box's ends are
+                // the first and last samples.
+                let shift = (tile.reference[0] - base) as f32 * UNIT;
+                let (p0, p1) = (x_cell[first_x] - shift + x_f[first_x], x_cell[last_x] - shift + x_f[last_x]);
+                tile.blo[0] = p0.min(p1);
+                tile.bhi[0] = p0.max(p1);
+                let lanes_f = load(&x_f, x0);
+                let lanes_cl = load(&x_cell, x0) - f32x8::splat(shift);
+                for k in 0..K {
+                    tile.f[k][0] = lanes_f;
+                    tile.cl[k][0] = lanes_cl;
+                }
+                self.tile::<M, IDS, DELTAS>(metric, region, &tile, &mut best);
+                for (k, b) in best.iter_mut().enumerate().take(rows_here) {
+                    self.finish::<Eight>(b);
+                    let o = (r0 + k) * width + x0;
+                    write_lanes(b, &mut out[o..o + cols_here]);
+                }
+            }
+        }
+    }
+
+    /// One tile: the bound, the candidates, the certificate, and the
+    /// per-sample kernel for lanes left uncertified. Ranks in lane units.
+    #[inline(always)]
+    fn tile<M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        region: &Region<D>,
+        t: &Tile<D>,
+        best: &mut [Best<Eight, D, N>; K],
+    ) {
+        for b in best.iter_mut() {
+            *b = Best::empty();
+        }
+        let cell_frame = |c: [i64; D]| -> [f32; D] { std::array::from_fn(|a| (c[a] - t.reference[a]) as f32 * UNIT) };
+        let (blo, bhi): ([f32x8; D], [f32x8; D]) =
+            (std::array::from_fn(|a| f32x8::splat(t.blo[a])), std::array::from_fn(|a| f32x8::splat(t.bhi[a])));
+
+        // The bound: the n smallest farthest distances from the tile's box
+        // among the points of the tile's own cells (of the cells around
+        // them too when the own cells hold fewer than n points).
+        let mut bound = self.bound(metric, region, t, t.reference, t.hi);
+        if bound == f32::INFINITY {
+            let (lo, hi) = (std::array::from_fn(|a| t.reference[a] - 1), std::array::from_fn(|a| t.hi[a] + 1));
+            bound = self.bound(metric, region, t, lo, hi);
+            if bound == f32::INFINITY {
+                return self.tile_per_sample::<M, IDS, DELTAS>(metric, t, best, [0; K]);
+            }
+        }
+        let once = inflate(distance_of_rank::<One>(self.config.metric, bound));
+        let certify = metric.rank_of_distance::<One>(once);
+        let prune = metric.rank_of_distance::<One>(inflate(once));
+        let prune8 = f32x8::splat(prune);
+
+        let lo: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
+        let hi: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
+        // Per axis, the cells of the searched box whose gap to the tile's
+        // box alone is within the pruning bound (at least the tile's own).
+        let mut axis_cell = [[0i64; 4]; D];
+        let mut axis_frame = [[0f32; 4]; D];
+        let mut axis_term = [[0f32; 4]; D];
+        let mut len = [0usize; D];
+        for a in 0..D {
+            for c in lo[a]..=hi[a] {
+                let frame = (c - t.reference[a]) as f32 * UNIT;
+                let term = metric.term::<One>((frame - t.bhi[a]).max(t.blo[a] - (frame + UNIT)).max(0.0));
+                if term <= prune {
+                    (axis_cell[a][len[a]], axis_frame[a][len[a]], axis_term[a][len[a]]) = (c, frame, term);
+                    len[a] += 1;
+                }
+            }
+        }
+        let mut at = [0usize; D];
+        'cells: loop {
+            let mut rank = axis_term[0][at[0]];
+            for a in 1..D {
+                rank = metric.fold::<One>(rank, axis_term[a][at[a]]);
+            }
+            if rank <= prune {
+                let c: [i64; D] = std::array::from_fn(|a| axis_cell[a][at[a]]);
+                let frame: [f32; D] = std::array::from_fn(|a| axis_frame[a][at[a]]);
+                let i = region.cell(c);
+                let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
+                // The sample minus the candidate cell's corner, per lane: the
+                // cell's offset from the lane's own cell is exact.
+                let mut shifted = [[f32x8::ZERO; D]; K];
+                let mut shifted_ready = false;
+                let mut g = s;
+                while g < e {
+                    let gap: [f32x8; D] = std::array::from_fn(|a| {
+                        let p = f32x8::splat(frame[a]) + load(&region.q[a], g);
+                        Eight::max(Eight::max(blo[a] - p, p - bhi[a]), f32x8::ZERO)
+                    });
+                    let near = Eight::le(metric.rank::<Eight, D>(&gap), prune8);
+                    let mut bits = near.to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
+                    if bits != 0 && !shifted_ready {
+                        for ((sh, f), cl) in shifted.iter_mut().zip(&t.f).zip(&t.cl) {
+                            for a in 0..D {
+                                sh[a] = f[a] - (f32x8::splat(frame[a]) - cl[a]);
+                            }
+                        }
+                        shifted_ready = true;
+                    }
+                    while bits != 0 {
+                        let p = g + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let q: [f32x8; D] = std::array::from_fn(|a| f32x8::splat(region.q[a][p]));
+                        let id = u32x8::splat(region.id[p]);
+                        for (b, sh) in best.iter_mut().zip(&shifted) {
+                            let delta: [f32x8; D] = std::array::from_fn(|a| sh[a] - q[a]);
+                            let rank = metric.rank::<Eight, D>(&delta);
+                            b.insert::<IDS, DELTAS>(rank, delta, id);
+                        }
+                    }
+                    g += 8;
+                }
+            }
+            let mut a = 0;
+            loop {
+                if a == D {
+                    break 'cells;
+                }
+                at[a] += 1;
+                if at[a] < len[a] {
+                    break;
+                }
+                at[a] = 0;
+                a += 1;
+            }
+        }
+
+        // The certificate, per lane.
+        let (low, high) = (cell_frame(lo), cell_frame(std::array::from_fn(|a| hi[a] + 1)));
+        let (low, high): ([f32x8; D], [f32x8; D]) =
+            (std::array::from_fn(|a| f32x8::splat(low[a])), std::array::from_fn(|a| f32x8::splat(high[a])));
+        let certify8 = f32x8::splat(certify);
+        let mut certified = [0u32; K];
+        for k in 0..K {
+            let mut edge = f32x8::splat(f32::INFINITY);
+            for a in 0..D {
+                let p = t.cl[k][a] + t.f[k][a];
+                edge = Eight::min(edge, Eight::min(p - low[a], high[a] - p));
+            }
+            let edge = Eight::max(edge * f32x8::splat(1.0 - SLACK_REL) - f32x8::splat(SLACK_ABS), f32x8::ZERO);
+            let last = best[k].rank[N - 1];
+            let ok = Eight::and(Eight::le(last, certify8), Eight::lt(last, metric.rank_of_distance::<Eight>(edge)));
+            certified[k] = ok.to_bitmask();
+        }
+        if certified.iter().all(|&m| m == 0xFF) {
+            return;
+        }
+        self.tile_per_sample::<M, IDS, DELTAS>(metric, t, best, certified)
+    }
+
+    /// The n-th smallest farthest distance (as a rank) from the tile's box
+    /// to the points of the cells `lo ..= hi`; +∞ if they hold fewer.
+    #[inline(always)]
+    fn bound<M: Metric32>(&self, metric: M, region: &Region<D>, t: &Tile<D>, lo: [i64; D], hi: [i64; D]) -> f32 {
+        let (blo, bhi): ([f32x8; D], [f32x8; D]) =
+            (std::array::from_fn(|a| f32x8::splat(t.blo[a])), std::array::from_fn(|a| f32x8::splat(t.bhi[a])));
+        // The n smallest per lane, sorted, by a min/max network.
+        let mut least = [f32x8::splat(f32::INFINITY); N];
+        for_cells(lo, hi, |c| {
+            let i = region.cell(c);
+            let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
+            for g in (s..e).step_by(8) {
+                let far: [f32x8; D] = std::array::from_fn(|a| {
+                    let p = f32x8::splat((c[a] - t.reference[a]) as f32 * UNIT) + load(&region.q[a], g);
+                    Eight::max(p - blo[a], bhi[a] - p)
+                });
+                let mut v = metric.rank::<Eight, D>(&far);
+                if e - g < 8 {
+                    v = f32x8::new(std::array::from_fn(|j| if j < e - g { 0.0 } else { 1.0 }))
+                        .simd_lt(f32x8::splat(0.5))
+                        .select(v, f32x8::splat(f32::INFINITY));
+                }
+                for l in least.iter_mut() {
+                    let (a, b) = (Eight::min(*l, v), Eight::max(*l, v));
+                    *l = a;
+                    v = b;
+                }
+            }
+        });
+        if N == 1 {
+            return least[0].to_array().into_iter().fold(f32::INFINITY, f32::min);
+        }
+        let mut all = [f32::INFINITY; 128];
+        for (k, l) in least.iter().enumerate() {
+            all[8 * k..8 * k + 8].copy_from_slice(&l.to_array());
+        }
+        let all = &mut all[..8 * N];
+        all.sort_unstable_by(f32::total_cmp);
+        all[N - 1]
+    }
+
+    /// The lanes of a tile not set in `certified`, by the per-sample kernel.
+    #[cold]
+    #[inline(never)]
+    fn tile_per_sample<M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        t: &Tile<D>,
+        best: &mut [Best<Eight, D, N>; K],
+        certified: [u32; K],
+    ) {
+        for (k, b) in best.iter_mut().enumerate() {
+            let f: [[f32; 8]; D] = std::array::from_fn(|a| t.f[k][a].to_array());
+            let cl: [[f32; 8]; D] = std::array::from_fn(|a| t.cl[k][a].to_array());
+            let mut rank = b.rank.map(|v| v.to_array());
+            let mut id = b.id.map(|v| v.to_array());
+            let mut delta = b.delta.map(|d| d.map(|v| v.to_array()));
+            for i in (0..8).filter(|i| certified[k] & (1 << i) == 0) {
+                let cell: [[i64; 8]; D] = std::array::from_fn(|a| [t.reference[a] + (cl[a][i] / UNIT) as i64; 8]);
+                let fr: [[f32; 8]; D] = std::array::from_fn(|a| [f[a][i]; 8]);
+                let at = Located::<One, D>::lanewise(cell, &fr, [true; 8]);
+                let one = self.search::<One, M, IDS, DELTAS>(metric, &at);
+                for j in 0..N {
+                    rank[j][i] = one.rank[j];
+                    id[j][i] = one.id[j];
+                    for (lanes, v) in delta[j].iter_mut().zip(one.delta[j]) {
+                        lanes[i] = v;
+                    }
+                }
+            }
+            b.rank = rank.map(f32x8::new);
+            b.id = id.map(u32x8::new);
+            b.delta = delta.map(|d| d.map(f32x8::new));
+        }
+    }
+}
+
+/// Eight values from `v[at..]` (the region's padding keeps it in bounds).
+#[inline(always)]
+fn load(v: &[f32], at: usize) -> f32x8 {
+    let s: &[f32; 8] = v[at..at + 8].try_into().expect("padded");
+    f32x8::new(*s)
+}
+
+/// Calls `visit` for every cell of the box `lo ..= hi`.
+#[inline(always)]
+fn for_cells<const D: usize>(lo: [i64; D], hi: [i64; D], mut visit: impl FnMut([i64; D])) {
+    let mut c = lo;
+    loop {
+        visit(c);
+        let mut a = 0;
+        loop {
+            if a == D {
+                return;
+            }
+            c[a] += 1;
+            if c[a] <= hi[a] {
+                break;
+            }
+            c[a] = lo[a];
+            a += 1;
+        }
+    }
+}
+
+fn min_max(v: &[i64]) -> (i64, i64) {
+    v.iter().fold((i64::MAX, i64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)))
+}
+
+/// Up to eight lanes of a finished result into `dst`.
+fn write_lanes<const D: usize, const N: usize>(b: &Best<Eight, D, N>, dst: &mut [Features32<D, N>]) {
+    let distance = b.rank.map(|v| v.to_array());
+    let id = b.id.map(|v| v.to_array());
+    let delta = b.delta.map(|d| d.map(|v| v.to_array()));
+    for (i, o) in dst.iter_mut().enumerate() {
+        o.distance = std::array::from_fn(|k| distance[k][i]);
+        o.id = std::array::from_fn(|k| id[k][i]);
+        o.delta = std::array::from_fn(|k| std::array::from_fn(|a| delta[k][a][i]));
+    }
+}
