@@ -508,10 +508,6 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 let frame: [f32; D] = std::array::from_fn(|a| axis_frame[a][at[a]]);
                 let i = region.cell(c);
                 let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
-                // The sample minus the candidate cell's corner, per lane: the
-                // cell's offset from the lane's own cell is exact.
-                let mut shifted = [[f32x8::ZERO; D]; K];
-                let mut shifted_ready = false;
                 let mut g = s;
                 while g < e {
                     let gap: [f32x8; D] = std::array::from_fn(|a| {
@@ -520,23 +516,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     });
                     let near = Eight::le(metric.rank::<Eight, D>(&gap), prune8);
                     let mut bits = near.to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
-                    if bits != 0 && !shifted_ready {
-                        for ((sh, f), cl) in shifted.iter_mut().zip(&t.f).zip(&t.cl) {
-                            for a in 0..D {
-                                sh[a] = f[a] - (f32x8::splat(frame[a]) - cl[a]);
+                    if bits != 0 {
+                        // The sample minus the candidate cell's corner, per
+                        // lane: the cell's offset from the lane's own cell
+                        // is exact.
+                        let shifted: [[f32x8; D]; K] = std::array::from_fn(|k| {
+                            std::array::from_fn(|a| t.f[k][a] - (f32x8::splat(frame[a]) - t.cl[k][a]))
+                        });
+                        while bits != 0 {
+                            let p = g + bits.trailing_zeros() as usize;
+                            bits &= bits - 1;
+                            let q: [f32x8; D] = std::array::from_fn(|a| f32x8::splat(region.q[a][p]));
+                            let id = u32x8::splat(region.id[p]);
+                            for (b, sh) in best.iter_mut().zip(&shifted) {
+                                let delta: [f32x8; D] = std::array::from_fn(|a| sh[a] - q[a]);
+                                let rank = metric.rank::<Eight, D>(&delta);
+                                b.insert::<IDS, DELTAS>(rank, delta, id);
                             }
-                        }
-                        shifted_ready = true;
-                    }
-                    while bits != 0 {
-                        let p = g + bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let q: [f32x8; D] = std::array::from_fn(|a| f32x8::splat(region.q[a][p]));
-                        let id = u32x8::splat(region.id[p]);
-                        for (b, sh) in best.iter_mut().zip(&shifted) {
-                            let delta: [f32x8; D] = std::array::from_fn(|a| sh[a] - q[a]);
-                            let rank = metric.rank::<Eight, D>(&delta);
-                            b.insert::<IDS, DELTAS>(rank, delta, id);
                         }
                     }
                     g += 8;
