@@ -155,8 +155,8 @@ struct Axes<const D: usize> {
 impl<const D: usize, const N: usize> Simd<D, N> {
     /// Whether [`Simd::evaluate_grid`] takes the coherent path for `grid`:
     /// [`Mode::Exact`], eight steps along axis 0 within one cell
-    /// (`8·|step[0]|·S ≤ 1`, S the [scale](crate::Pattern::scale)) and every
-    /// coordinate valid. The results are the same bits either way; only the
+    /// (`8·|step[0]|·S ≤ 1`, S the [scale](crate::Pattern::scale)), rows
+    /// spanning fewer than 2^23 cells, and every coordinate valid. The results are the same bits either way; only the
     /// speed differs.
     ///
     /// ```
@@ -193,6 +193,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 cell[a].push(floor as i64);
                 f[a].push((u - floor) as f32 * UNIT);
             }
+        }
+        // Axis 0's cells are held relative to the band's first cell, times
+        // UNIT, in f32: exact only within 2^24 cells.
+        let (lo, hi) = min_max(&cell[0]);
+        if hi.saturating_sub(lo) >= 1 << 23 {
+            return None;
         }
         Some(Axes { cell, f })
     }
