@@ -10,8 +10,7 @@
 //!    code does). A cell is skipped when the nearest point of the cell is
 //!    already farther than the current F_n: in any Lp metric that nearest
 //!    distance is the norm of the per-axis gaps between f and the cell's
-//!    extent (Worley's pruning, written for every metric at once). (Strictly
-//!    farther, see Ties below.)
+//!    extent (Worley's pruning, written for every metric at once).
 //! 3. After the block of radius r (Chebyshev radius, r = 1 for the 3^d
 //!    block), every unvisited cell lies outside the box
 //!    [c − r, c + r + 1]^d, and in every Lp metric the distance from the
@@ -19,8 +18,8 @@
 //!    min(f_a + r, r + 1 − f_a), since moving along one axis has the same
 //!    length in every Lp norm. If F_n < B_r no unvisited cell can hold a
 //!    point as close, not even a tie, and the result is certified; otherwise
-//!    the next shell of
-//!    cells (Chebyshev radius r + 1) is searched, pruned the same way.
+//!    the next shell of cells (Chebyshev radius r + 1) is searched, pruned
+//!    the same way.
 //!
 //! In [`Mode::Window`] step 3 is skipped. Ranks ([`Metric::rank`]: squared
 //! distances for Euclidean, the distance itself otherwise) are compared
