@@ -42,8 +42,9 @@
 //!   independent chains. A lane's result depends on that lane alone, which is
 //!   what makes one lane and eight lanes bit-identical.
 //! - **Exact.** After the block, a lane whose F_n is farther than the block's
-//!   outside takes the wider search, shell by shell, masked to the lanes that
-//!   still need it (a cold path: 0.003 % of samples for 3D F8 at λ 5).
+//!   outside (or as far, when IDs are asked for and a tie must be seen)
+//!   takes the wider search, shell by shell, masked to the lanes that still
+//!   need it (a cold path: 0.003 % of samples for 3D F8 at λ 5).
 //! - **Compile-time choices.** Dimension `D` and order `N` are const
 //!   generics; the metric and the outputs (distances, IDs, deltas) are
 //!   dispatched once per call into monomorphised loops, so nothing the caller
