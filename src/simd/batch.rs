@@ -257,7 +257,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// Grid points `first..first + out.len()`.
-    fn grid_range(&self, grid: &Grid<D>, first: usize, out: &mut [Features32<D, N>]) {
+    pub(super) fn grid_range(&self, grid: &Grid<D>, first: usize, out: &mut [Features32<D, N>]) {
         for (c, dst) in out.chunks_mut(8).enumerate() {
             let start = first + c * 8;
             let mut block = [[0.0; D]; 8];
@@ -271,15 +271,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// Eight samples into up to eight results.
     #[inline]
     pub(super) fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
-        let r = self.evaluate8(block);
-        let distance = r.distance.map(|v| v.to_array());
-        let id = r.id.map(|v| v.to_array());
-        let delta = r.delta.map(|d| d.map(|v| v.to_array()));
-        for (i, o) in dst.iter_mut().enumerate() {
-            o.distance = std::array::from_fn(|k| distance[k][i]);
-            o.id = std::array::from_fn(|k| id[k][i]);
-            o.delta = std::array::from_fn(|k| std::array::from_fn(|a| delta[k][a][i]));
-        }
+        super::coherent::write_lanes(&self.dispatch8(&self.locate::<Eight>(block)), dst);
     }
 
     /// One sample given as a cell of the pattern (see

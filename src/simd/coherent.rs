@@ -145,6 +145,16 @@ fn inflate(d: f32) -> f32 {
     d * (1.0 + SLACK_REL) + SLACK_ABS
 }
 
+/// A band of grid rows and its cells' points: what every tile of the band
+/// reads.
+struct Band<'a, const D: usize> {
+    grid: &'a Grid<D>,
+    axes: &'a Axes<D>,
+    /// The band's first row.
+    first: usize,
+    region: Region<D>,
+}
+
 /// The grid's coordinates per axis, located once: cell and fraction (lane
 /// units) of every index.
 struct Axes<const D: usize> {
@@ -258,101 +268,54 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if cells.is_none_or(|n| n > 4 * out.len() as u128 + 256) {
             // Rows far apart: generating their cells would cost more than
             // it saves.
-            self.rows_per_sample(grid, first, out);
+            self.grid_range(grid, first * grid.size[0], out);
             return;
         }
-        let region = Region::generate(self, lo, hi);
+        let band = Band { grid, axes, first, region: Region::generate(self, lo, hi) };
         match (self.config.metric, self.outputs) {
-            (Metric::Euclidean, o) => self.tiles_euclid(o, grid, axes, first, &region, out),
-            (Metric::Manhattan, o) => self.tiles_outputs(Manhattan, o, grid, axes, first, &region, out),
-            (Metric::Chebyshev, o) => self.tiles_outputs(Chebyshev, o, grid, axes, first, &region, out),
-            (Metric::Minkowski(p), o) => self.tiles_outputs(Minkowski(p), o, grid, axes, first, &region, out),
+            (Metric::Euclidean, o) => self.tiles_euclid(o, &band, out),
+            (Metric::Manhattan, o) => self.tiles_outputs(Manhattan, o, &band, out),
+            (Metric::Chebyshev, o) => self.tiles_outputs(Chebyshev, o, &band, out),
+            (Metric::Minkowski(p), o) => self.tiles_outputs(Minkowski(p), o, &band, out),
         }
     }
 
     /// The Euclidean tile loops, recompiled for AVX2 when this build lacks
     /// it and the CPU has it, as [`Simd::dispatch8`] does for the
     /// per-sample kernel: the same operations, so the same bits.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn tiles_euclid(
-        &self,
-        o: Outputs,
-        grid: &Grid<D>,
-        axes: &Axes<D>,
-        first: usize,
-        region: &Region<D>,
-        out: &mut [Features32<D, N>],
-    ) {
+    fn tiles_euclid(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
         if super::runtime_avx2() {
             // SAFETY: `tiles_avx2` requires AVX2 and nothing else, and
             // `runtime_avx2` has just seen the CPU report it.
             #[allow(unsafe_code)]
-            return unsafe { self.tiles_avx2(o, grid, axes, first, region, out) };
+            return unsafe { self.tiles_avx2(o, band, out) };
         }
-        self.tiles_for(Euclid, o, grid, axes, first, region, out)
+        self.tiles_for(Euclid, o, band, out)
     }
 
     /// [`Simd::tiles_euclid`]'s loops compiled with AVX2 enabled.
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[target_feature(enable = "avx2")]
-    #[allow(clippy::too_many_arguments)]
-    fn tiles_avx2(
-        &self,
-        o: Outputs,
-        grid: &Grid<D>,
-        axes: &Axes<D>,
-        first: usize,
-        region: &Region<D>,
-        out: &mut [Features32<D, N>],
-    ) {
-        self.tiles_for(Euclid, o, grid, axes, first, region, out)
+    fn tiles_avx2(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
+        self.tiles_for(Euclid, o, band, out)
     }
 
     /// The tile loop for the outputs asked for.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn tiles_for<M: Metric32>(
-        &self,
-        m: M,
-        o: Outputs,
-        grid: &Grid<D>,
-        axes: &Axes<D>,
-        first: usize,
-        region: &Region<D>,
-        out: &mut [Features32<D, N>],
-    ) {
+    fn tiles_for<M: Metric32>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
         match o {
-            Outputs::Distances => self.tiles::<M, false, false>(m, grid, axes, first, region, out),
-            Outputs::Ids => self.tiles::<M, true, false>(m, grid, axes, first, region, out),
-            Outputs::IdsAndDeltas => self.tiles::<M, true, true>(m, grid, axes, first, region, out),
+            Outputs::Distances => self.tiles::<M, false, false>(m, band, out),
+            Outputs::Ids => self.tiles::<M, true, false>(m, band, out),
+            Outputs::IdsAndDeltas => self.tiles::<M, true, true>(m, band, out),
         }
     }
 
     /// The other metrics' tile loops, out of line (as `search_outputs`).
-    #[allow(clippy::too_many_arguments)]
     #[inline(never)]
-    fn tiles_outputs<M: Metric32>(
-        &self,
-        m: M,
-        o: Outputs,
-        grid: &Grid<D>,
-        axes: &Axes<D>,
-        first: usize,
-        region: &Region<D>,
-        out: &mut [Features32<D, N>],
-    ) {
-        self.tiles_for(m, o, grid, axes, first, region, out)
-    }
-
-    /// Grid rows `first..` by the per-sample kernel.
-    fn rows_per_sample(&self, grid: &Grid<D>, first: usize, out: &mut [Features32<D, N>]) {
-        let start = first * grid.size[0];
-        for (c, dst) in out.chunks_mut(8).enumerate() {
-            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + c * 8 + i.min(dst.len() - 1)));
-            self.write8(&block, dst);
-        }
+    fn tiles_outputs<M: Metric32>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
+        self.tiles_for(m, o, band, out)
     }
 
     /// Every tile of a band.
@@ -360,12 +323,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     fn tiles<M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
-        grid: &Grid<D>,
-        axes: &Axes<D>,
-        first: usize,
-        region: &Region<D>,
+        band: &Band<'_, D>,
         out: &mut [Features32<D, N>],
     ) {
+        let Band { grid, axes, first, ref region } = *band;
         let width = grid.size[0];
         let rows = out.len() / width;
         // Axis 0 as lanes: each sample's cell relative to the band's first
@@ -691,7 +652,7 @@ fn min_max(v: &[i64]) -> (i64, i64) {
 }
 
 /// Up to eight lanes of a finished result into `dst`.
-fn write_lanes<const D: usize, const N: usize>(b: &Best<Eight, D, N>, dst: &mut [Features32<D, N>]) {
+pub(super) fn write_lanes<const D: usize, const N: usize>(b: &Best<Eight, D, N>, dst: &mut [Features32<D, N>]) {
     let distance = b.rank.map(|v| v.to_array());
     let id = b.id.map(|v| v.to_array());
     let delta = b.delta.map(|d| d.map(|v| v.to_array()));
