@@ -271,7 +271,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// Eight samples into up to eight results.
     #[inline]
     pub(super) fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
-        super::coherent::write_lanes(&self.dispatch8(&self.locate::<Eight>(block)), dst);
+        super::coherent::write_lanes::<D, N, true, true>(&self.dispatch8(&self.locate::<Eight>(block)), dst);
     }
 
     /// One sample given as a cell of the pattern (see

@@ -46,12 +46,13 @@ use wide::{f32x8, u32x8};
 use super::lanes::{Eight, Lanes, One};
 use super::{
     distance_of_rank, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski, Outputs,
-    Simd, UNIT,
+    Simd, INVALID_ID, UNIT,
 };
 use crate::config::{Metric, Mode};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
 
-/// Vectors per tile: a tile is 8 samples along axis 0 times `K` rows.
+/// Vectors per tile: a tile is 8 samples along axis 0 times `K` rows; the
+/// rows' values are held one per lane, so `K` is the lane count.
 pub(super) const K: usize = 8;
 /// Rows of a grid per band; a band's cells are generated once.
 const BAND: usize = 32;
@@ -125,18 +126,53 @@ impl<const D: usize> Region<D> {
 }
 
 /// One tile of samples, 8 × [`K`] lanes, in the frame of its `reference`
-/// cell (the smallest cell of its lanes on every axis).
+/// cell (the smallest cell of its lanes on every axis). Every row of a grid
+/// lies along axis 0, so axis 0 varies with the lane and the other axes
+/// only with the row: those are held with row k in lane k.
 struct Tile<const D: usize> {
-    /// Each lane's fraction in its own cell, lane units.
-    f: [[f32x8; D]; K],
-    /// Each lane's cell minus the reference, times [`UNIT`] (exact).
-    cl: [[f32x8; D]; K],
+    /// Axis 0 per lane: the fraction in the lane's own cell (lane units),
+    /// and that cell minus the reference, times [`UNIT`] (exact).
+    x_f: f32x8,
+    x_cl: f32x8,
+    /// The other axes per row, the same two quantities (lane k is row k;
+    /// index 0 is unused).
+    row_f: [f32x8; D],
+    row_cl: [f32x8; D],
     reference: [i64; D],
     /// The lanes' cells: largest per axis (the smallest is the reference).
     hi: [i64; D],
     /// The bounding box of the lanes in the tile's frame, lane units.
     blo: [f32; D],
     bhi: [f32; D],
+}
+
+/// One cell along axis 0 of a tile's searched cells.
+#[derive(Clone, Copy, Default)]
+struct AxisCell {
+    /// Its offset from the start of its row of cells in the region.
+    index: usize,
+    /// Its lower corner in the tile's frame, lane units.
+    frame: f32,
+    /// The metric's term of its gap to the tile's box on axis 0.
+    term: f32,
+    /// Whether it is one of the tile's own cells on axis 0.
+    own: bool,
+    /// Each lane's position on axis 0 minus the corner, lane units.
+    shift: f32x8,
+}
+
+/// A row of cells along axis 0 searched by a row of tiles.
+struct CellRow<const D: usize> {
+    /// The region's index of the row's first cell.
+    base: usize,
+    /// The metric's terms of its gaps to the tiles' box on axes 1..,
+    /// folded.
+    rest: f32,
+    /// Whether it holds the tiles' own cells on axes 1...
+    own: bool,
+    /// Each row of samples' position minus the corner on axes 1.. (lane k
+    /// is row k; 0 unused).
+    shift: [f32x8; D],
 }
 
 /// A distance (lane units) grown by the slack.
@@ -350,6 +386,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             }
             (c, f)
         };
+        let mut cell_rows = Vec::with_capacity(64);
+        let mut near = vec![0f32; region.id.len() + 8];
         for r0 in (0..rows).step_by(K) {
             let rows_here = (rows - r0).min(K);
             let rk: [([i64; D], [f32; D]); K] = std::array::from_fn(|k| row_at(r0 + k.min(rows_here - 1)));
@@ -368,12 +406,18 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 blo[a] = rk.iter().map(pos).fold(f32::INFINITY, f32::min);
                 bhi[a] = rk.iter().map(pos).fold(f32::NEG_INFINITY, f32::max);
             }
-            let mut tile = Tile { f: [[f32x8::ZERO; D]; K], cl: [[f32x8::ZERO; D]; K], reference, hi, blo, bhi };
-            for ((f, cl), (c, fr)) in tile.f.iter_mut().zip(&mut tile.cl).zip(&rk) {
-                for a in 1..D {
-                    f[a] = f32x8::splat(fr[a]);
-                    cl[a] = f32x8::splat((c[a] - reference[a]) as f32 * UNIT);
+            let row_lanes = |v: &dyn Fn(&([i64; D], [f32; D])) -> f32| f32x8::new(std::array::from_fn(|k| v(&rk[k])));
+            let row_f = std::array::from_fn(|a| if a == 0 { f32x8::ZERO } else { row_lanes(&|r| r.1[a]) });
+            let row_cl = std::array::from_fn(|a| {
+                if a == 0 {
+                    f32x8::ZERO
+                } else {
+                    row_lanes(&|r| (r.0[a] - reference[a]) as f32 * UNIT)
                 }
+            });
+            let mut tile = Tile { x_f: f32x8::ZERO, x_cl: f32x8::ZERO, row_f, row_cl, reference, hi, blo, bhi };
+            if !far_apart {
+                self.cell_rows(metric, region, &tile, &mut cell_rows, &mut near);
             }
             let mut best: [Best<Eight, D, N>; K] = std::array::from_fn(|_| Best::empty());
             for x0 in (0..width).step_by(8) {
@@ -397,46 +441,127 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 let (p0, p1) = (x_cell[first_x] - shift + x_f[first_x], x_cell[last_x] - shift + x_f[last_x]);
                 tile.blo[0] = p0.min(p1);
                 tile.bhi[0] = p0.max(p1);
-                let lanes_f = load(&x_f, x0);
-                let lanes_cl = load(&x_cell, x0) - f32x8::splat(shift);
-                for k in 0..K {
-                    tile.f[k][0] = lanes_f;
-                    tile.cl[k][0] = lanes_cl;
-                }
-                self.tile::<M, IDS, DELTAS>(metric, region, &tile, &mut best);
+                tile.x_f = load(&x_f, x0);
+                tile.x_cl = load(&x_cell, x0) - f32x8::splat(shift);
+                self.tile::<M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, &mut best);
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<Eight>(b);
                     let o = (r0 + k) * width + x0;
-                    write_lanes(b, &mut out[o..o + cols_here]);
+                    write_lanes::<D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
             }
         }
     }
 
-    /// One tile: the bound, the candidates, the certificate, and the
-    /// per-sample kernel for lanes left uncertified. Ranks in lane units.
+    /// The rows of cells along axis 0 that a row of tiles searches (its
+    /// own cells and one more on every side, on every axis but 0), and for
+    /// every point in them, the fold of its gap terms to the tiles' box on
+    /// those axes, into `near` at the point's index.
+    fn cell_rows<M: Metric32>(
+        &self,
+        metric: M,
+        region: &Region<D>,
+        t: &Tile<D>,
+        rows: &mut Vec<CellRow<D>>,
+        near: &mut [f32],
+    ) {
+        rows.clear();
+        let lo: [i64; D] = std::array::from_fn(|a| if a == 0 { region.origin[0] } else { t.reference[a] - 1 });
+        let hi: [i64; D] = std::array::from_fn(|a| if a == 0 { region.origin[0] } else { t.hi[a] + 1 });
+        let (blo, bhi): ([f32x8; D], [f32x8; D]) =
+            (std::array::from_fn(|a| f32x8::splat(t.blo[a])), std::array::from_fn(|a| f32x8::splat(t.bhi[a])));
+        for_cells(lo, hi, |c| {
+            let frame: [f32; D] =
+                std::array::from_fn(|a| if a == 0 { 0.0 } else { (c[a] - t.reference[a]) as f32 * UNIT });
+            let terms: [f32; D] = std::array::from_fn(|a| {
+                metric.term::<One>((frame[a] - t.bhi[a]).max(t.blo[a] - (frame[a] + UNIT)).max(0.0))
+            });
+            let row = CellRow {
+                base: region.cell(c),
+                // Folded as in `Metric32::rank`: axes 1, 2, …, then 0.
+                rest: terms[1..].iter().copied().reduce(|r, v| metric.fold::<One>(r, v)).unwrap_or(0.0),
+                own: (1..D).all(|a| c[a] != lo[a] && c[a] != hi[a]),
+                shift: std::array::from_fn(|a| {
+                    if a == 0 {
+                        f32x8::ZERO
+                    } else {
+                        t.row_f[a] - (f32x8::splat(frame[a]) - t.row_cl[a])
+                    }
+                }),
+            };
+            let (s, e) = (region.start[row.base] as usize, region.start[row.base + region.side[0]] as usize);
+            for g in (s..e).step_by(8) {
+                let gap: [f32x8; D] = std::array::from_fn(|a| {
+                    if a == 0 {
+                        return f32x8::ZERO;
+                    }
+                    let p = f32x8::splat(frame[a]) + load(&region.q[a], g);
+                    Eight::max(Eight::max(blo[a] - p, p - bhi[a]), f32x8::ZERO)
+                });
+                let rest = if D > 1 { metric.rest::<Eight, D>(&gap) } else { f32x8::ZERO };
+                let n = (e - g).min(8);
+                near[g..g + n].copy_from_slice(&rest.to_array()[..n]);
+            }
+            rows.push(row);
+        });
+    }
+
+    /// One tile: the points of its own cells, the bound they give, the
+    /// other candidates, the certificate, and the per-sample kernel for
+    /// lanes left uncertified. Ranks in lane units. `rows` and `near` are
+    /// the tile row's, from [`Simd::cell_rows`].
     #[inline(always)]
     fn tile<M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         region: &Region<D>,
         t: &Tile<D>,
+        rows: &[CellRow<D>],
+        near: &[f32],
         best: &mut [Best<Eight, D, N>; K],
     ) {
         for b in best.iter_mut() {
             *b = Best::empty();
         }
-        let cell_frame = |c: [i64; D]| -> [f32; D] { std::array::from_fn(|a| (c[a] - t.reference[a]) as f32 * UNIT) };
-        let (blo, bhi): ([f32x8; D], [f32x8; D]) =
-            (std::array::from_fn(|a| f32x8::splat(t.blo[a])), std::array::from_fn(|a| f32x8::splat(t.bhi[a])));
+        let (blo, bhi) = (f32x8::splat(t.blo[0]), f32x8::splat(t.bhi[0]));
+        // The searched cells along axis 0 (the tile's own and one more on
+        // each side): offset of the cell's index in its row, corner in the
+        // tile's frame, the metric's term of the gap between the cell and
+        // the tile's box, whether it is the tile's own, and each lane's
+        // position minus the corner.
+        let (lo, hi) = (t.reference[0] - 1, t.hi[0] + 1);
+        let mut x_cells = [AxisCell::default(); 4];
+        let count = (hi - lo + 1) as usize;
+        for (xc, c) in x_cells.iter_mut().zip(lo..=hi) {
+            let frame = (c - t.reference[0]) as f32 * UNIT;
+            *xc = AxisCell {
+                index: (c - region.origin[0]) as usize,
+                frame,
+                term: metric.term::<One>((frame - t.bhi[0]).max(t.blo[0] - (frame + UNIT)).max(0.0)),
+                own: c != lo && c != hi,
+                shift: t.x_f - (f32x8::splat(frame) - t.x_cl),
+            };
+        }
+        let x_cells = &x_cells[..count];
 
-        // The bound: the n smallest farthest distances from the tile's box
-        // among the points of the tile's own cells (of the cells around
-        // them too when the own cells hold fewer than n points).
-        let mut bound = self.bound(metric, region, t, t.reference, t.hi);
+        // The tile's own cells: every point is a candidate.
+        for row in rows.iter().filter(|r| r.own) {
+            for xc in x_cells.iter().filter(|xc| xc.own) {
+                let i = row.base + xc.index;
+                for p in region.start[i] as usize..region.start[i + 1] as usize {
+                    self.candidate::<M, IDS, DELTAS>(metric, region, p, xc.shift, &row.shift, best);
+                }
+            }
+        }
+
+        // The bound: the largest F_n of any lane so far (of the cells
+        // around when the own cells hold fewer than n points).
+        let bound = best.iter().fold(f32x8::ZERO, |m, b| Eight::max(m, b.rank[N - 1]));
+        let mut bound = bound.to_array().into_iter().fold(0.0, f32::max);
+        let lo_all: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
+        let hi_all: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
         if bound == f32::INFINITY {
-            let (lo, hi) = (std::array::from_fn(|a| t.reference[a] - 1), std::array::from_fn(|a| t.hi[a] + 1));
-            bound = self.bound(metric, region, t, lo, hi);
+            bound = self.bound(metric, region, t, lo_all, hi_all);
             if bound == f32::INFINITY {
                 return self.tile_per_sample::<M, IDS, DELTAS>(metric, t, best, [0; K]);
             }
@@ -446,91 +571,51 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let prune = metric.rank_of_distance::<One>(inflate(once));
         let prune8 = f32x8::splat(prune);
 
-        let lo: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
-        let hi: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
-        // Per axis, the cells of the searched box whose gap to the tile's
-        // box alone is within the pruning bound (at least the tile's own).
-        let mut axis_cell = [[0i64; 4]; D];
-        let mut axis_frame = [[0f32; 4]; D];
-        let mut axis_term = [[0f32; 4]; D];
-        let mut len = [0usize; D];
-        for a in 0..D {
-            for c in lo[a]..=hi[a] {
-                let frame = (c - t.reference[a]) as f32 * UNIT;
-                let term = metric.term::<One>((frame - t.bhi[a]).max(t.blo[a] - (frame + UNIT)).max(0.0));
-                if term <= prune {
-                    (axis_cell[a][len[a]], axis_frame[a][len[a]], axis_term[a][len[a]]) = (c, frame, term);
-                    len[a] += 1;
+        // The other cells: a cell farther than the pruning bound from the
+        // tile's box is skipped, and so is a point.
+        for row in rows.iter().filter(|r| r.rest <= prune) {
+            for xc in x_cells {
+                if (row.own && xc.own) || metric.fold::<One>(row.rest, xc.term) > prune {
+                    continue;
                 }
-            }
-        }
-        let mut at = [0usize; D];
-        'cells: loop {
-            let mut rank = axis_term[0][at[0]];
-            for a in 1..D {
-                rank = metric.fold::<One>(rank, axis_term[a][at[a]]);
-            }
-            if rank <= prune {
-                let c: [i64; D] = std::array::from_fn(|a| axis_cell[a][at[a]]);
-                let frame: [f32; D] = std::array::from_fn(|a| axis_frame[a][at[a]]);
-                let i = region.cell(c);
+                let i = row.base + xc.index;
                 let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
+                let frame = f32x8::splat(xc.frame);
                 let mut g = s;
                 while g < e {
-                    let gap: [f32x8; D] = std::array::from_fn(|a| {
-                        let p = f32x8::splat(frame[a]) + load(&region.q[a], g);
-                        Eight::max(Eight::max(blo[a] - p, p - bhi[a]), f32x8::ZERO)
-                    });
-                    let near = Eight::le(metric.rank::<Eight, D>(&gap), prune8);
-                    let mut bits = near.to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
-                    if bits != 0 {
-                        // The sample minus the candidate cell's corner, per
-                        // lane: the cell's offset from the lane's own cell
-                        // is exact.
-                        let shifted: [[f32x8; D]; K] = std::array::from_fn(|k| {
-                            std::array::from_fn(|a| t.f[k][a] - (f32x8::splat(frame[a]) - t.cl[k][a]))
-                        });
-                        while bits != 0 {
-                            let p = g + bits.trailing_zeros() as usize;
-                            bits &= bits - 1;
-                            let q: [f32x8; D] = std::array::from_fn(|a| f32x8::splat(region.q[a][p]));
-                            let id = u32x8::splat(region.id[p]);
-                            for (b, sh) in best.iter_mut().zip(&shifted) {
-                                let delta: [f32x8; D] = std::array::from_fn(|a| sh[a] - q[a]);
-                                let rank = metric.rank::<Eight, D>(&delta);
-                                b.insert::<IDS, DELTAS>(rank, delta, id);
-                            }
-                        }
+                    let p = frame + load(&region.q[0], g);
+                    let gap = Eight::max(Eight::max(blo - p, p - bhi), f32x8::ZERO);
+                    let rank = metric.fold::<Eight>(load(near, g), metric.term::<Eight>(gap));
+                    let mut bits = Eight::le(rank, prune8).to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
+                    while bits != 0 {
+                        let p = g + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        self.candidate::<M, IDS, DELTAS>(metric, region, p, xc.shift, &row.shift, best);
                     }
                     g += 8;
                 }
             }
-            let mut a = 0;
-            loop {
-                if a == D {
-                    break 'cells;
-                }
-                at[a] += 1;
-                if at[a] < len[a] {
-                    break;
-                }
-                at[a] = 0;
-                a += 1;
-            }
         }
+        let (lo, hi) = (lo_all, hi_all);
 
-        // The certificate, per lane.
-        let (low, high) = (cell_frame(lo), cell_frame(std::array::from_fn(|a| hi[a] + 1)));
-        let (low, high): ([f32x8; D], [f32x8; D]) =
-            (std::array::from_fn(|a| f32x8::splat(low[a])), std::array::from_fn(|a| f32x8::splat(high[a])));
+        // The certificate, per lane: the distance to the outside of the
+        // searched cells is a minimum over axes, so axis 0's part per lane
+        // and the others' per row.
+        let outside = |f: f32x8, cl: f32x8, a: usize| {
+            let p = cl + f;
+            let (low, high) = ((lo[a] - t.reference[a]) as f32 * UNIT, (hi[a] + 1 - t.reference[a]) as f32 * UNIT);
+            Eight::min(p - f32x8::splat(low), f32x8::splat(high) - p)
+        };
+        let x_edge = outside(t.x_f, t.x_cl, 0);
+        let mut row_edge = f32x8::splat(f32::INFINITY);
+        for a in 1..D {
+            row_edge = Eight::min(row_edge, outside(t.row_f[a], t.row_cl[a], a));
+        }
+        let row_edge = row_edge.to_array();
         let certify8 = f32x8::splat(certify);
         let mut certified = [0u32; K];
         for k in 0..K {
-            let mut edge = f32x8::splat(f32::INFINITY);
-            for a in 0..D {
-                let p = t.cl[k][a] + t.f[k][a];
-                edge = Eight::min(edge, Eight::min(p - low[a], high[a] - p));
-            }
+            let edge = Eight::min(x_edge, f32x8::splat(row_edge[k]));
             let edge = Eight::max(edge * f32x8::splat(1.0 - SLACK_REL) - f32x8::splat(SLACK_ABS), f32x8::ZERO);
             let last = best[k].rank[N - 1];
             let ok = Eight::and(Eight::le(last, certify8), Eight::lt(last, metric.rank_of_distance::<Eight>(edge)));
@@ -583,6 +668,45 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         all[N - 1]
     }
 
+    /// One candidate point `p` of the region against every lane of a tile:
+    /// `x_shift` is each lane's position minus the point's cell corner on
+    /// axis 0, `row_shift` each row's on the other axes. Its delta is
+    /// `shift − q` on every axis, so a row shares the rest of the rank
+    /// ([`Metric32::rest`]) and only axis 0's term is per lane.
+    #[inline(always)]
+    fn candidate<M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        region: &Region<D>,
+        p: usize,
+        x_shift: f32x8,
+        row_shift: &[f32x8; D],
+        best: &mut [Best<Eight, D, N>; K],
+    ) {
+        let dx = x_shift - f32x8::splat(region.q[0][p]);
+        let id = u32x8::splat(region.id[p]);
+        let d_row: [f32x8; D] =
+            std::array::from_fn(|a| if a == 0 { f32x8::ZERO } else { row_shift[a] - f32x8::splat(region.q[a][p]) });
+        let d_row_lanes: [[f32; K]; D] = if DELTAS || !M::SPLITS { d_row.map(|v| v.to_array()) } else { [[0.0; K]; D] };
+        let delta = |k: usize| -> [f32x8; D] {
+            std::array::from_fn(|a| if a == 0 { dx } else { f32x8::splat(d_row_lanes[a][k]) })
+        };
+        if M::SPLITS && D > 1 {
+            let first = metric.term::<Eight>(dx);
+            let rest = metric.rest::<Eight, D>(&d_row).to_array();
+            for (k, b) in best.iter_mut().enumerate() {
+                let rank = metric.fold::<Eight>(f32x8::splat(rest[k]), first);
+                let delta = if DELTAS { delta(k) } else { [f32x8::ZERO; D] };
+                b.insert::<IDS, DELTAS>(rank, delta, id);
+            }
+        } else {
+            for (k, b) in best.iter_mut().enumerate() {
+                let delta = delta(k);
+                b.insert::<IDS, DELTAS>(metric.rank::<Eight, D>(&delta), delta, id);
+            }
+        }
+    }
+
     /// The lanes of a tile not set in `certified`, by the per-sample kernel.
     #[cold]
     #[inline(never)]
@@ -593,15 +717,26 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         best: &mut [Best<Eight, D, N>; K],
         certified: [u32; K],
     ) {
+        let (x_f, x_cl) = (t.x_f.to_array(), t.x_cl.to_array());
+        let row_f: [[f32; 8]; D] = t.row_f.map(|v| v.to_array());
+        let row_cl: [[f32; 8]; D] = t.row_cl.map(|v| v.to_array());
         for (k, b) in best.iter_mut().enumerate() {
-            let f: [[f32; 8]; D] = std::array::from_fn(|a| t.f[k][a].to_array());
-            let cl: [[f32; 8]; D] = std::array::from_fn(|a| t.cl[k][a].to_array());
             let mut rank = b.rank.map(|v| v.to_array());
             let mut id = b.id.map(|v| v.to_array());
             let mut delta = b.delta.map(|d| d.map(|v| v.to_array()));
             for i in (0..8).filter(|i| certified[k] & (1 << i) == 0) {
-                let cell: [[i64; 8]; D] = std::array::from_fn(|a| [t.reference[a] + (cl[a][i] / UNIT) as i64; 8]);
-                let fr: [[f32; 8]; D] = std::array::from_fn(|a| [f[a][i]; 8]);
+                let (f, cl) = (
+                    |a: usize| if a == 0 { x_f[i] } else { row_f[a][k] },
+                    |a: usize| {
+                        if a == 0 {
+                            x_cl[i]
+                        } else {
+                            row_cl[a][k]
+                        }
+                    },
+                );
+                let cell: [[i64; 8]; D] = std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; 8]);
+                let fr: [[f32; 8]; D] = std::array::from_fn(|a| [f(a); 8]);
                 let at = Located::<One, D>::lanewise(cell, &fr, [true; 8]);
                 let one = self.search::<One, M, IDS, DELTAS>(metric, &at);
                 for j in 0..N {
@@ -651,11 +786,18 @@ fn min_max(v: &[i64]) -> (i64, i64) {
     v.iter().fold((i64::MAX, i64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)))
 }
 
-/// Up to eight lanes of a finished result into `dst`.
-pub(super) fn write_lanes<const D: usize, const N: usize>(b: &Best<Eight, D, N>, dst: &mut [Features32<D, N>]) {
+/// Up to eight lanes of a finished result into `dst`. Without `IDS` the
+/// IDs are written as [`INVALID_ID`] and without `DELTAS` the deltas as
+/// zero, which is what a result holds when they were not asked for and
+/// every lane is valid; the general caller passes both as true.
+#[inline(always)]
+pub(super) fn write_lanes<const D: usize, const N: usize, const IDS: bool, const DELTAS: bool>(
+    b: &Best<Eight, D, N>,
+    dst: &mut [Features32<D, N>],
+) {
     let distance = b.rank.map(|v| v.to_array());
-    let id = b.id.map(|v| v.to_array());
-    let delta = b.delta.map(|d| d.map(|v| v.to_array()));
+    let id = if IDS { b.id.map(|v| v.to_array()) } else { [[INVALID_ID; 8]; N] };
+    let delta = if DELTAS { b.delta.map(|d| d.map(|v| v.to_array())) } else { [[[0.0; 8]; D]; N] };
     for (i, o) in dst.iter_mut().enumerate() {
         o.distance = std::array::from_fn(|k| distance[k][i]);
         o.id = std::array::from_fn(|k| id[k][i]);

@@ -772,6 +772,15 @@ impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
     #[inline(always)]
     fn insert<const IDS: bool, const DELTAS: bool>(&mut self, rank: L::F, delta: [L::F; D], id: L::U) {
         let (mut r, mut d, mut i) = (rank, delta, id);
+        if !IDS && !DELTAS {
+            // The same choice as below, as a minimum and a maximum.
+            for k in 0..N {
+                let kept = self.rank[k];
+                self.rank[k] = L::min(kept, r);
+                r = L::max(r, kept);
+            }
+            return;
+        }
         for k in 0..N {
             let lt = if IDS {
                 L::or(L::lt(r, self.rank[k]), L::and(L::eq(r, self.rank[k]), L::u_lt(i, self.id[k])))
@@ -874,11 +883,26 @@ pub trait Metric32: Copy {
     fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F;
     /// Rank of a length.
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F;
-    /// Rank of a vector: the axes' terms folded in axis order.
+    /// Whether [`Metric32::rank`] is, bit for bit, axis 0's term folded
+    /// into [`Metric32::rest`]: then a row of samples along axis 0 shares
+    /// the rest of every candidate (the coherent path relies on it).
+    const SPLITS: bool = true;
+    /// Rank of a vector: the terms of axes 1, 2, … folded in order
+    /// ([`Metric32::rest`]), then axis 0's term folded in last.
     #[inline(always)]
     fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
-        let mut s = self.term::<L>(v[0]);
-        for x in &v[1..] {
+        let first = self.term::<L>(v[0]);
+        if D == 1 {
+            return first;
+        }
+        self.fold::<L>(self.rest::<L, D>(v), first)
+    }
+    /// The terms of axes 1, 2, … folded in order; `v[0]` is not read.
+    /// Needs D ≥ 2.
+    #[inline(always)]
+    fn rest<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
+        let mut s = self.term::<L>(v[1]);
+        for x in &v[2..] {
             s = self.fold::<L>(s, self.term::<L>(*x));
         }
         s
@@ -946,6 +970,8 @@ impl Metric32 for Chebyshev {
 }
 
 impl Metric32 for Minkowski {
+    /// The rank is computed from the whole vector at once.
+    const SPLITS: bool = false;
     #[inline(always)]
     fn term<L: Lanes>(&self, x: L::F) -> L::F {
         L::abs(x)
