@@ -445,7 +445,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 tile.x_cl = load(&x_cell, x0) - f32x8::splat(shift);
                 self.tile::<M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, &mut best);
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
-                    self.finish::<Eight>(b);
+                    self.finish::<Eight, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
                     write_lanes::<D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
@@ -521,7 +521,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         best: &mut [Best<Eight, D, N>; K],
     ) {
         for b in best.iter_mut() {
-            *b = Best::empty();
+            b.reset::<IDS, DELTAS>();
         }
         let (blo, bhi) = (f32x8::splat(t.blo[0]), f32x8::splat(t.bhi[0]));
         // The searched cells along axis 0 (the tile's own and one more on
@@ -796,6 +796,16 @@ pub(super) fn write_lanes<const D: usize, const N: usize, const IDS: bool, const
     dst: &mut [Features32<D, N>],
 ) {
     let distance = b.rank.map(|v| v.to_array());
+    if !IDS && !DELTAS {
+        for (i, o) in dst.iter_mut().enumerate() {
+            *o = Features32 {
+                distance: std::array::from_fn(|k| distance[k][i]),
+                delta: [[0.0; D]; N],
+                id: [INVALID_ID; N],
+            };
+        }
+        return;
+    }
     let id = if IDS { b.id.map(|v| v.to_array()) } else { [[INVALID_ID; 8]; N] };
     let delta = if DELTAS { b.delta.map(|d| d.map(|v| v.to_array())) } else { [[[0.0; 8]; D]; N] };
     for (i, o) in dst.iter_mut().enumerate() {

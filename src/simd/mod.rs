@@ -475,7 +475,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev>(Chebyshev, o, at),
             (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski>(Minkowski(p), o, at),
         };
-        self.finish::<L>(&mut best);
+        self.finish::<L, true>(&mut best);
         if at.valid[..L::N].iter().any(|v| !v) {
             mark_invalid(&mut best, &at.valid);
         }
@@ -483,14 +483,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// Ranks in lane units to distances in user units, and deltas to user
-    /// units: the last step of every path.
+    /// units (unless `DELTAS` is false: then they are zero and stay so): the
+    /// last step of every path.
     #[inline(always)]
-    fn finish<L: Lanes>(&self, best: &mut Best<L, D, N>) {
+    fn finish<L: Lanes, const DELTAS: bool>(&self, best: &mut Best<L, D, N>) {
         let (unit, inv) = (L::f(1.0 / UNIT), L::f(self.inv_scale));
         let metric = self.config.metric;
         for k in 0..N {
             best.rank[k] = L::mul(L::mul(distance_of_rank::<L>(metric, best.rank[k]), unit), inv);
-            for a in 0..D {
+            for a in (0..D).filter(|_| DELTAS) {
                 best.delta[k][a] = L::mul(L::mul(best.delta[k][a], unit), inv);
             }
         }
@@ -761,6 +762,19 @@ impl<L: Lanes, const D: usize, const N: usize> Best<L, D, N> {
     #[inline(always)]
     fn empty() -> Self {
         Best { rank: [L::f(f32::INFINITY); N], delta: [[L::f(0.0); D]; N], id: [L::u(INVALID_ID); N] }
+    }
+
+    /// Back to [`Best::empty`], writing only what the outputs use (the
+    /// others are never changed from it).
+    #[inline(always)]
+    fn reset<const IDS: bool, const DELTAS: bool>(&mut self) {
+        self.rank = [L::f(f32::INFINITY); N];
+        if IDS {
+            self.id = [L::u(INVALID_ID); N];
+        }
+        if DELTAS {
+            self.delta = [[L::f(0.0); D]; N];
+        }
     }
 
     /// Inserts one candidate per lane (rank +∞ in lanes that have none).
