@@ -55,7 +55,7 @@ use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_C
 /// rows' values are held one per lane, so `K` is the lane count.
 pub(super) const K: usize = 8;
 /// Rows of a grid per band; a band's cells are generated once.
-const BAND: usize = 32;
+const BAND: usize = 64;
 /// Relative slack of the candidate and certificate tests.
 const SLACK_REL: f32 = 1.0 / 256.0;
 /// Absolute slack of the same tests, in lane units (2^−24 cells).
@@ -71,6 +71,10 @@ pub(super) struct Region<const D: usize> {
     /// Fixed-point coordinates (the 24-bit integers, exact in f32), padded
     /// by eight so that a group of eight read from any cell stays in bounds.
     q: [Vec<f32>; D],
+    /// Each point's cell along axis 0, from the region's first (exact:
+    /// fewer than 2^24 cells), padded like `q`.
+    x_cell: Vec<f32>,
+    /// IDs, when the outputs ask for them (empty otherwise).
     id: Vec<u32>,
 }
 
@@ -84,17 +88,22 @@ impl<const D: usize> Region<D> {
             std::array::from_fn(|a| (0..side[a]).map(|i| axis_word(a, axis_term(lo[a] + i as i64))).collect());
         let keys = simd.pattern.keys();
         let table = simd.pattern.table();
+        let ids = simd.outputs != Outputs::Distances;
         let guess = cells * (table.mean().ceil() as usize + 1) + 8;
         let mut start = Vec::with_capacity(cells + 1);
         let mut q: [Vec<f32>; D] = std::array::from_fn(|_| Vec::with_capacity(guess));
-        let mut id = Vec::with_capacity(guess);
+        let mut x_cell = Vec::with_capacity(guess);
+        let mut id = Vec::with_capacity(if ids { guess } else { 0 });
         let mut index = [0usize; D];
         for _ in 0..cells {
-            start.push(id.len() as u32);
+            start.push(x_cell.len() as u32);
             let w: [u32; D] = std::array::from_fn(|a| words[a][index[a]]);
             let h = hash_words(keys, &w);
             for p in &simd.points[..table.population(h) as usize] {
-                id.push(feature_id(p.id.0.wrapping_mul(h).wrapping_add(p.id.1)));
+                if ids {
+                    id.push(feature_id(p.id.0.wrapping_mul(h).wrapping_add(p.id.1)));
+                }
+                x_cell.push(index[0] as f32);
                 for (qa, (m, c)) in q.iter_mut().zip(p.coordinate) {
                     qa.push((m.wrapping_mul(h).wrapping_add(c) >> 8) as f32);
                 }
@@ -107,11 +116,11 @@ impl<const D: usize> Region<D> {
                 index[a] = 0;
             }
         }
-        start.push(id.len() as u32);
-        for qa in &mut q {
-            qa.resize(qa.len() + 8, 0.0);
+        start.push(x_cell.len() as u32);
+        for v in q.iter_mut().chain([&mut x_cell]) {
+            v.resize(v.len() + 8, 0.0);
         }
-        Region { origin: lo, side, start, q, id }
+        Region { origin: lo, side, start, q, x_cell, id }
     }
 
     /// The index of cell `c`, which must lie in the region.
@@ -151,8 +160,6 @@ struct Tile<const D: usize> {
 struct AxisCell {
     /// Its offset from the start of its row of cells in the region.
     index: usize,
-    /// Its lower corner in the tile's frame, lane units.
-    frame: f32,
     /// The metric's term of its gap to the tile's box on axis 0.
     term: f32,
     /// Whether it is one of the tile's own cells on axis 0.
@@ -387,7 +394,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             (c, f)
         };
         let mut cell_rows = Vec::with_capacity(64);
-        let mut near = vec![0f32; region.id.len() + 8];
+        let mut near = vec![0f32; region.x_cell.len()];
         for r0 in (0..rows).step_by(K) {
             let rows_here = (rows - r0).min(K);
             let rk: [([i64; D], [f32; D]); K] = std::array::from_fn(|k| row_at(r0 + k.min(rows_here - 1)));
@@ -536,7 +543,6 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             let frame = (c - t.reference[0]) as f32 * UNIT;
             *xc = AxisCell {
                 index: (c - region.origin[0]) as usize,
-                frame,
                 term: metric.term::<One>((frame - t.bhi[0]).max(t.blo[0] - (frame + UNIT)).max(0.0)),
                 own: c != lo && c != hi,
                 shift: t.x_f - (f32x8::splat(frame) - t.x_cl),
@@ -572,28 +578,37 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let prune8 = f32x8::splat(prune);
 
         // The other cells: a cell farther than the pruning bound from the
-        // tile's box is skipped, and so is a point.
+        // tile's box is skipped, and so is a point. The cells of a row that
+        // remain are consecutive in the region, so their points are read as
+        // one run; each point's cell along axis 0 comes with it.
+        let reference = (t.reference[0] - region.origin[0]) as f32;
+        let (own_lo, own_hi) = (f32x8::ZERO, f32x8::splat((t.hi[0] - t.reference[0]) as f32));
+        let shift = |cell: f32| t.x_f - (f32x8::splat((cell - reference) * UNIT) - t.x_cl);
         for row in rows.iter().filter(|r| r.rest <= prune) {
-            for xc in x_cells {
-                if (row.own && xc.own) || metric.fold::<One>(row.rest, xc.term) > prune {
-                    continue;
+            let first = usize::from(metric.fold::<One>(row.rest, x_cells[0].term) > prune);
+            let last = count - 1 - usize::from(metric.fold::<One>(row.rest, x_cells[count - 1].term) > prune);
+            let (s, e) = (
+                region.start[row.base + x_cells[first].index] as usize,
+                region.start[row.base + x_cells[last].index + 1] as usize,
+            );
+            let mut g = s;
+            while g < e {
+                let cell = load(&region.x_cell, g) - f32x8::splat(reference);
+                let p = cell * f32x8::splat(UNIT) + load(&region.q[0], g);
+                let gap = Eight::max(Eight::max(blo - p, p - bhi), f32x8::ZERO);
+                let rank = metric.fold::<Eight>(load(near, g), metric.term::<Eight>(gap));
+                let mut keep = Eight::le(rank, prune8);
+                if row.own {
+                    // The own cells' points are in already.
+                    keep = Eight::and(keep, Eight::or(Eight::lt(cell, own_lo), Eight::lt(own_hi, cell)));
                 }
-                let i = row.base + xc.index;
-                let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
-                let frame = f32x8::splat(xc.frame);
-                let mut g = s;
-                while g < e {
-                    let p = frame + load(&region.q[0], g);
-                    let gap = Eight::max(Eight::max(blo - p, p - bhi), f32x8::ZERO);
-                    let rank = metric.fold::<Eight>(load(near, g), metric.term::<Eight>(gap));
-                    let mut bits = Eight::le(rank, prune8).to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
-                    while bits != 0 {
-                        let p = g + bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        self.candidate::<M, IDS, DELTAS>(metric, region, p, xc.shift, &row.shift, best);
-                    }
-                    g += 8;
+                let mut bits = keep.to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
+                while bits != 0 {
+                    let p = g + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    self.candidate::<M, IDS, DELTAS>(metric, region, p, shift(region.x_cell[p]), &row.shift, best);
                 }
+                g += 8;
             }
         }
         let (lo, hi) = (lo_all, hi_all);
@@ -684,7 +699,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         best: &mut [Best<Eight, D, N>; K],
     ) {
         let dx = x_shift - f32x8::splat(region.q[0][p]);
-        let id = u32x8::splat(region.id[p]);
+        let id = if IDS { u32x8::splat(region.id[p]) } else { u32x8::ZERO };
         let d_row: [f32x8; D] =
             std::array::from_fn(|a| if a == 0 { f32x8::ZERO } else { row_shift[a] - f32x8::splat(region.q[a][p]) });
         let d_row_lanes: [[f32; K]; D] = if DELTAS || !M::SPLITS { d_row.map(|v| v.to_array()) } else { [[0.0; K]; D] };
