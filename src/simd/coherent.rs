@@ -3,25 +3,41 @@
 //! A grid's neighbouring samples need the same few cells. Instead of
 //! hashing and generating those cells again for every sample, this path
 //! generates every cell of a band of the grid once ([`Region`]: the points as
-//! struct-of-arrays, with their IDs), then evaluates *tiles* of 8 × [`K`]
-//! samples (eight along axis 0 in each vector, `K` rows) against the points
-//! that can matter to the tile, each point broadcast to every lane.
+//! struct-of-arrays, each with its cell along axis 0, and IDs when asked
+//! for), then evaluates *tiles* of 8 × [`K`] samples (eight along axis 0 in
+//! each vector, `K` rows) against the points that can matter to the tile,
+//! each point broadcast to every lane.
+//!
+//! ## Why it is cheap
+//! - A grid's row lies along axis 0, so a sample's position on the other
+//!   axes is its row's. The rank folds axis 0's term in last
+//!   ([`Metric32::rank`]), so for each candidate the rest of the rank is
+//!   computed once per row (the eight rows in the lanes of one vector) and
+//!   each vector of eight samples adds one term.
+//! - A row of tiles shares its rows of cells: for every point in them, the
+//!   fold of its gap terms to the tiles' box on the axes other than 0 is
+//!   computed once ([`Simd::cell_rows`]), and a tile's point test adds axis
+//!   0's term. A row's remaining cells are consecutive in the region, so
+//!   their points are read as one run.
 //!
 //! ## Why the bits are the per-sample path's
 //! - A lane computes a candidate's delta exactly as the per-sample kernel
 //!   does: the sample's fraction minus the candidate cell's offset from the
 //!   sample's own cell (an exact multiple of [`UNIT`]), minus the point's
-//!   24-bit coordinate. The tile's frame is used only to choose candidates,
-//!   never for a result.
-//! - Ranks, the insertion and the final scaling are the same functions.
+//!   24-bit coordinate. Its rank is [`Metric32::rank`] of that delta, axis
+//!   0's term folded into the rest of the axes' in the same order. The
+//!   tile's frame is used only to choose candidates, never for a result.
+//! - The insertion and the final scaling are the same functions.
 //! - Points are ordered by rank and then by ID (see
 //!   [`reference`](crate::reference)), so the order in which a path meets
 //!   the points does not matter: only which points it meets.
 //!
 //! ## Why every point that matters is met
-//! - **The bound.** For the n points of the tile's own cells whose farthest
-//!   distance from the tile's bounding box is smallest, that farthest
-//!   distance U bounds F_n of every sample in the tile.
+//! - **The bound.** Every point of the tile's own cells is inserted in
+//!   every lane first; the largest F_n of any lane then, U, bounds F_n of
+//!   every lane for good. When the own cells hold fewer than n points, U is
+//!   the n-th smallest farthest distance from the tile's box to the points
+//!   of the cells around.
 //! - **The candidates.** Of the cells within one cell of the tile's cells,
 //!   a cell whose box is farther than U from the tile's box is skipped, and
 //!   so is a point farther than U from it. Both tests are made with U
@@ -413,15 +429,11 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 blo[a] = rk.iter().map(pos).fold(f32::INFINITY, f32::min);
                 bhi[a] = rk.iter().map(pos).fold(f32::NEG_INFINITY, f32::max);
             }
-            let row_lanes = |v: &dyn Fn(&([i64; D], [f32; D])) -> f32| f32x8::new(std::array::from_fn(|k| v(&rk[k])));
-            let row_f = std::array::from_fn(|a| if a == 0 { f32x8::ZERO } else { row_lanes(&|r| r.1[a]) });
-            let row_cl = std::array::from_fn(|a| {
-                if a == 0 {
-                    f32x8::ZERO
-                } else {
-                    row_lanes(&|r| (r.0[a] - reference[a]) as f32 * UNIT)
-                }
-            });
+            // Axes 1.. per row, row k in lane k: fraction, and cell minus the
+            // reference times UNIT (axis 0's entries are zero, unused).
+            let row_f = std::array::from_fn(|a| f32x8::new(std::array::from_fn(|k| rk[k].1[a])));
+            let row_cl =
+                std::array::from_fn(|a| f32x8::new(std::array::from_fn(|k| (rk[k].0[a] - reference[a]) as f32 * UNIT)));
             let mut tile = Tile { x_f: f32x8::ZERO, x_cl: f32x8::ZERO, row_f, row_cl, reference, hi, blo, bhi };
             if !far_apart {
                 self.cell_rows(metric, region, &tile, &mut cell_rows, &mut near);
