@@ -180,8 +180,6 @@ struct AxisCell {
     term: f32,
     /// Whether it is one of the tile's own cells on axis 0.
     own: bool,
-    /// Each lane's position on axis 0 minus the corner, lane units.
-    shift: f32x8,
 }
 
 /// A row of cells along axis 0 searched by a row of tiles.
@@ -196,6 +194,19 @@ struct CellRow<const D: usize> {
     /// Each row of samples' position minus the corner on axes 1.. (lane k
     /// is row k; 0 unused).
     shift: [f32x8; D],
+}
+
+/// The gap on one axis between the cell whose lower corner is at `frame`
+/// and the box `lo ..= hi` (lane units): zero where they overlap.
+#[inline(always)]
+fn cell_gap(frame: f32, lo: f32, hi: f32) -> f32 {
+    (frame - hi).max(lo - (frame + UNIT)).max(0.0)
+}
+
+/// The gap on one axis between points at `p` and the box `lo ..= hi`.
+#[inline(always)]
+fn point_gap(p: f32x8, lo: f32x8, hi: f32x8) -> f32x8 {
+    Eight::max(Eight::max(lo - p, p - hi), f32x8::ZERO)
 }
 
 /// A distance (lane units) grown by the slack.
@@ -492,9 +503,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         for_cells(lo, hi, |c| {
             let frame: [f32; D] =
                 std::array::from_fn(|a| if a == 0 { 0.0 } else { (c[a] - t.reference[a]) as f32 * UNIT });
-            let terms: [f32; D] = std::array::from_fn(|a| {
-                metric.term::<One>((frame[a] - t.bhi[a]).max(t.blo[a] - (frame[a] + UNIT)).max(0.0))
-            });
+            let terms: [f32; D] = std::array::from_fn(|a| metric.term::<One>(cell_gap(frame[a], t.blo[a], t.bhi[a])));
             let row = CellRow {
                 base: region.cell(c),
                 // Folded as in `Metric32::rank`: axes 1, 2, …, then 0.
@@ -514,8 +523,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     if a == 0 {
                         return f32x8::ZERO;
                     }
-                    let p = f32x8::splat(frame[a]) + load(&region.q[a], g);
-                    Eight::max(Eight::max(blo[a] - p, p - bhi[a]), f32x8::ZERO)
+                    point_gap(f32x8::splat(frame[a]) + load(&region.q[a], g), blo[a], bhi[a])
                 });
                 let rest = if D > 1 { metric.rest::<Eight, D>(&gap) } else { f32x8::ZERO };
                 let n = (e - g).min(8);
@@ -543,31 +551,33 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             b.reset::<IDS, DELTAS>();
         }
         let (blo, bhi) = (f32x8::splat(t.blo[0]), f32x8::splat(t.bhi[0]));
-        // The searched cells along axis 0 (the tile's own and one more on
-        // each side): offset of the cell's index in its row, corner in the
-        // tile's frame, the metric's term of the gap between the cell and
-        // the tile's box, whether it is the tile's own, and each lane's
-        // position minus the corner.
-        let (lo, hi) = (t.reference[0] - 1, t.hi[0] + 1);
+        // The searched cells (the tile's own and one more on each side).
+        let lo: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
+        let hi: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
+        // Along axis 0: offset of the cell's index in its row, the metric's
+        // term of the gap between the cell and the tile's box, and whether
+        // it is the tile's own.
         let mut x_cells = [AxisCell::default(); 4];
-        let count = (hi - lo + 1) as usize;
-        for (xc, c) in x_cells.iter_mut().zip(lo..=hi) {
-            let frame = (c - t.reference[0]) as f32 * UNIT;
+        let count = (hi[0] - lo[0] + 1) as usize;
+        for (xc, c) in x_cells.iter_mut().zip(lo[0]..=hi[0]) {
             *xc = AxisCell {
                 index: (c - region.origin[0]) as usize,
-                term: metric.term::<One>((frame - t.bhi[0]).max(t.blo[0] - (frame + UNIT)).max(0.0)),
-                own: c != lo && c != hi,
-                shift: t.x_f - (f32x8::splat(frame) - t.x_cl),
+                term: metric.term::<One>(cell_gap((c - t.reference[0]) as f32 * UNIT, t.blo[0], t.bhi[0])),
+                own: c != lo[0] && c != hi[0],
             };
         }
         let x_cells = &x_cells[..count];
+        // Each lane's position on axis 0 minus the corner of the cell
+        // `cell` cells from the region's first (exact small integers).
+        let reference = (t.reference[0] - region.origin[0]) as f32;
+        let shift = |cell: f32| t.x_f - (f32x8::splat((cell - reference) * UNIT) - t.x_cl);
 
         // The tile's own cells: every point is a candidate.
         for row in rows.iter().filter(|r| r.own) {
             for xc in x_cells.iter().filter(|xc| xc.own) {
-                let i = row.base + xc.index;
+                let (i, x_shift) = (row.base + xc.index, shift(xc.index as f32));
                 for p in region.start[i] as usize..region.start[i + 1] as usize {
-                    self.candidate::<M, IDS, DELTAS>(metric, region, p, xc.shift, &row.shift, best);
+                    self.candidate::<M, IDS, DELTAS>(metric, region, p, x_shift, &row.shift, best);
                 }
             }
         }
@@ -576,10 +586,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // around when the own cells hold fewer than n points).
         let bound = best.iter().fold(f32x8::ZERO, |m, b| Eight::max(m, b.rank[N - 1]));
         let mut bound = bound.to_array().into_iter().fold(0.0, f32::max);
-        let lo_all: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
-        let hi_all: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
         if bound == f32::INFINITY {
-            bound = self.bound(metric, region, t, lo_all, hi_all);
+            bound = self.bound(metric, region, t, lo, hi);
             if bound == f32::INFINITY {
                 return self.tile_per_sample::<M, IDS, DELTAS>(metric, t, best, [0; K]);
             }
@@ -593,9 +601,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // tile's box is skipped, and so is a point. The cells of a row that
         // remain are consecutive in the region, so their points are read as
         // one run; each point's cell along axis 0 comes with it.
-        let reference = (t.reference[0] - region.origin[0]) as f32;
         let (own_lo, own_hi) = (f32x8::ZERO, f32x8::splat((t.hi[0] - t.reference[0]) as f32));
-        let shift = |cell: f32| t.x_f - (f32x8::splat((cell - reference) * UNIT) - t.x_cl);
         for row in rows.iter().filter(|r| r.rest <= prune) {
             let first = usize::from(metric.fold::<One>(row.rest, x_cells[0].term) > prune);
             let last = count - 1 - usize::from(metric.fold::<One>(row.rest, x_cells[count - 1].term) > prune);
@@ -607,8 +613,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             while g < e {
                 let cell = load(&region.x_cell, g) - f32x8::splat(reference);
                 let p = cell * f32x8::splat(UNIT) + load(&region.q[0], g);
-                let gap = Eight::max(Eight::max(blo - p, p - bhi), f32x8::ZERO);
-                let rank = metric.fold::<Eight>(load(near, g), metric.term::<Eight>(gap));
+                let rank = metric.fold::<Eight>(load(near, g), metric.term::<Eight>(point_gap(p, blo, bhi)));
                 let mut keep = Eight::le(rank, prune8);
                 if row.own {
                     // The own cells' points are in already.
@@ -623,7 +628,6 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 g += 8;
             }
         }
-        let (lo, hi) = (lo_all, hi_all);
 
         // The certificate, per lane: the distance to the outside of the
         // searched cells is a minimum over axes, so axis 0's part per lane
