@@ -209,6 +209,50 @@ fn slices_grids_and_parallel_batches_give_the_single_point_bits() {
     }
 }
 
+/// A slice's samples whose first stage leaves them open are finished in
+/// blocks gathered from across the slice: each must still be the single
+/// point's result, whatever its neighbours in the slice, bad lanes included.
+fn slice_identity<const D: usize, const N: usize>(config: Config, len: usize) {
+    for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
+        let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+        let points: Vec<[f64; D]> = (0..len)
+            .map(|i| {
+                let mut p = sample_point(17, i, 200.0);
+                // Bad lanes (NaN, ±∞) and lanes beyond 2^31 cells among good ones.
+                match i % 37 {
+                    5 => p[0] = f64::NAN,
+                    11 => p[D - 1] = f64::INFINITY,
+                    19 => p[0] = f64::NEG_INFINITY,
+                    23 => p[1] = 3.0e10 + i as f64,
+                    _ => {}
+                }
+                p
+            })
+            .collect();
+        let mut out = vec![Features32::<D, N> { distance: [-1.0; N], delta: [[-1.0; D]; N], id: [7; N] }; len];
+        kernel.evaluate_slice(&points, &mut out).unwrap();
+        for (i, p) in points.iter().enumerate() {
+            assert_same(&out[i], &kernel.evaluate(*p), &format!("{config:?} {outputs:?} slice point {i} at {p:?}"));
+        }
+    }
+}
+
+#[test]
+fn slices_finish_open_samples_with_the_single_point_bits() {
+    let c = |order| Config { order, ..Config::default() };
+    // Lengths that leave a gathered block partly full at the end.
+    slice_identity::<2, 1>(c(1), 3001);
+    slice_identity::<3, 2>(c(2), 4093);
+    slice_identity::<3, 4>(Config { order: 4, density: 0.5, ..Config::default() }, 2005);
+    slice_identity::<4, 3>(c(3), 1203);
+    slice_identity::<3, 8>(c(8), 1001);
+    slice_identity::<3, 2>(Config { order: 2, mode: Mode::Window, ..Config::default() }, 2011);
+    slice_identity::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() }, 2011);
+    for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(1.5)] {
+        slice_identity::<3, 2>(Config { order: 2, metric, ..Config::default() }, 1003);
+    }
+}
+
 #[test]
 fn buffers_of_the_wrong_size_are_an_error_and_nothing_is_written() {
     use worley::{Grid, SizeError};

@@ -9,8 +9,10 @@
 //! - quick-noise `Cellular` (batch, one octave): one jittered point per cell
 //!   on a 3^3 window; its own output scale.
 //! - simdnoise `cellular_3d` / `cellular2_3d`: one jittered point per cell
-//!   (jitter 0.25), 3^3 window, F1 squared / F2−F1 style outputs; grid only,
-//!   since its per-point entry is an `unsafe` intrinsic API.
+//!   (jitter 0.25), 3^3 window, F1 squared / F2−F1 (`Distance2Sub`). Grids
+//!   through its builder; random points through its AVX2 entry points,
+//!   which are `unsafe` functions of `__m256` lanes (called only when the
+//!   CPU reports AVX2, eight points at a time).
 //! - fastnoise-lite `Cellular`: one jittered point per cell, scalar.
 //! - noise (noise-rs) `Worley`: f64, one point per cell from a fixed table.
 //!
@@ -24,6 +26,7 @@
 //! simdnoise also detect at run time.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use simdnoise::Cell2ReturnType;
 use std::hint::black_box;
 use std::time::Instant;
 use worley::{Config, Features32, Grid, Outputs, Simd};
@@ -104,9 +107,71 @@ fn peers(c: &mut Criterion, random: &[[f32; 3]], grid: &[[f32; 3]]) {
     group.sample_size(10);
     group.throughput(Throughput::Elements((SIDE * SIDE) as u64));
     group.bench_function(BenchmarkId::new("simdnoise-cellular2", "grid"), |b| {
-        b.iter(|| simdnoise::NoiseBuilder::cellular2_3d(SIDE, SIDE, 1).with_freq(freq).generate());
+        b.iter(|| {
+            simdnoise::NoiseBuilder::cellular2_3d(SIDE, SIDE, 1)
+                .with_freq(freq)
+                .with_return_type(Cell2ReturnType::Distance2Sub)
+                .generate()
+        });
     });
     group.finish();
+}
+
+/// simdnoise on scattered points: its AVX2 entry points, eight points at a
+/// time, coordinates scaled by [`FREQUENCY`] as its builder scales a grid's.
+/// `f2` picks `cellular2_3d` (F2 − F1) over `cellular_3d` (F1). Returns
+/// false, writing nothing, when the CPU lacks AVX2 or FMA.
+fn simdnoise_points(xs: &[Vec<f32>; 3], out: &mut [f32], f2: bool) -> bool {
+    if !(is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")) {
+        return false;
+    }
+    // SAFETY: the CPU has just reported AVX2 and FMA, the only features the
+    // function is compiled for.
+    #[allow(unsafe_code)]
+    unsafe {
+        simdnoise_points_avx2(xs, out, f2)
+    };
+    true
+}
+
+/// The body of [`simdnoise_points`], compiled for AVX2 and FMA.
+#[target_feature(enable = "avx2,fma")]
+fn simdnoise_points_avx2(xs: &[Vec<f32>; 3], out: &mut [f32], f2: bool) {
+    use simdeez::avx2::{Avx2, F32x8};
+    use simdnoise::{CellDistanceFunction::Euclidean, CellReturnType::Distance};
+    use std::arch::x86_64::{_mm256_set1_ps, _mm256_setr_ps, _mm256_storeu_ps};
+    let load = |v: &[f32]| _mm256_setr_ps(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+    let (freq, jitter) = (_mm256_set1_ps(FREQUENCY), _mm256_set1_ps(0.25));
+    for (i, o) in out.chunks_exact_mut(8).enumerate() {
+        let [x, y, z] = std::array::from_fn(|a| F32x8(load(&xs[a][i * 8..i * 8 + 8])) * F32x8(freq));
+        // SAFETY (both calls): this function runs only where AVX2 and FMA
+        // are present (see `simdnoise_points`); the functions read and write
+        // nothing but their arguments.
+        #[allow(unsafe_code)]
+        let v = unsafe {
+            if f2 {
+                simdnoise::cellular::cellular2_3d::<Avx2>(
+                    x,
+                    y,
+                    z,
+                    Euclidean,
+                    Cell2ReturnType::Distance2Sub,
+                    F32x8(jitter),
+                    0,
+                    1,
+                    1,
+                )
+                .0
+            } else {
+                simdnoise::avx2::cellular_3d(x.0, y.0, z.0, Euclidean, Distance, jitter, 1)
+            }
+        };
+        // SAFETY: `o` holds exactly eight f32.
+        #[allow(unsafe_code)]
+        unsafe {
+            _mm256_storeu_ps(o.as_mut_ptr(), v)
+        };
+    }
 }
 
 /// The grid slice as a [`Grid`]: the same points as `points().1`.
@@ -153,7 +218,11 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         vec![Features32::<3, 4> { distance: [0.0; 4], delta: [[0.0; 3]; 4], id: [0; 4] }; n],
     );
     let (mut qg, mut qr, mut crackle) = (vec![0f32; n], vec![0f32; random.len()], vec![0f32; n]);
+    let (mut sr, mut sr2, mut crackle_r) =
+        (vec![0f32; random.len()], vec![0f32; random.len()], vec![0f32; random.len()]);
     let mut slice_out = vec![Features32::<3, 1> { distance: [0.0; 1], delta: [[0.0; 3]; 1], id: [0; 1] }; random.len()];
+    let mut slice_out2 =
+        vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; random.len()];
     let mut entries: Vec<Entry> = Vec::new();
     fn add<'a>(
         entries: &mut Vec<Entry<'a>>,
@@ -180,10 +249,37 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         "grid F2−F1",
         n,
         Box::new(|| {
-            black_box(simdnoise::NoiseBuilder::cellular2_3d(SIDE, SIDE, 1).with_freq(freq).generate());
+            black_box(
+                simdnoise::NoiseBuilder::cellular2_3d(SIDE, SIDE, 1)
+                    .with_freq(freq)
+                    .with_return_type(Cell2ReturnType::Distance2Sub)
+                    .generate(),
+            );
         }),
     );
     add(&mut entries, "quick-noise 0.3 F1", "random F1", random.len(), Box::new(|| quick(&rx, &mut qr)));
+    if simdnoise_points(&rx, &mut sr, false) {
+        add(
+            &mut entries,
+            "simdnoise 3.1 F1",
+            "random F1",
+            random.len(),
+            Box::new(|| {
+                simdnoise_points(&rx, &mut sr, false);
+                black_box(&sr);
+            }),
+        );
+        add(
+            &mut entries,
+            "simdnoise 3.1 F2−F1",
+            "random F2−F1",
+            random.len(),
+            Box::new(|| {
+                simdnoise_points(&rx, &mut sr2, true);
+                black_box(&sr2);
+            }),
+        );
+    }
     add(&mut entries, "worley evaluate_grid F1", "grid F1", n, Box::new(|| f1.evaluate_grid(&spec, &mut o1).unwrap()));
     add(
         &mut entries,
@@ -212,6 +308,19 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         "random F1",
         random.len(),
         Box::new(|| f1.evaluate_slice(black_box(random), &mut slice_out).unwrap()),
+    );
+    add(
+        &mut entries,
+        "worley evaluate_slice F2−F1",
+        "random F2−F1",
+        random.len(),
+        Box::new(|| {
+            f2.evaluate_slice(black_box(random), &mut slice_out2).unwrap();
+            for (c, f) in crackle_r.iter_mut().zip(&slice_out2) {
+                *c = f.distance[1] - f.distance[0];
+            }
+            black_box(&crackle_r);
+        }),
     );
     for _ in 0..9 {
         for e in entries.iter_mut() {
@@ -243,6 +352,8 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         let simd_ref = match *case {
             "grid F1" => of("simdnoise 3.1 F1", "grid F1"),
             "grid F2−F1" => of("simdnoise 3.1 F2−F1", "grid F2−F1"),
+            "random F1" => of("simdnoise 3.1 F1", "random F1"),
+            "random F2−F1" => of("simdnoise 3.1 F2−F1", "random F2−F1"),
             _ => None,
         };
         let ratio = |r: Option<f64>| r.map_or("".to_string(), |r| format!("{:.2}", rate / r));

@@ -161,14 +161,52 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if out.len() < xs.len() {
             return Err(SizeError { needed: xs.len(), given: out.len() });
         }
-        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
+        // Scattered samples: every block of eight runs the first stage of
+        // the search (each lane's 2^d block), and the lanes it leaves open
+        // are gathered into blocks of their own for the whole search, so a
+        // far cell is visited for eight lanes that need it rather than
+        // masked inside every block. A lane's result depends on that lane
+        // alone, so this gives the bits of `write8` on any block.
+        let mut open = Open::<D> { points: [[0.0; D]; 8], slots: [0; 8], len: 0 };
+        for (c, chunk) in xs.chunks(8).enumerate() {
             let mut block = [[0.0; D]; 8];
             for (b, p) in block.iter_mut().zip(chunk) {
                 *b = p.coordinates();
             }
-            self.write8(&block, dst);
+            let (best, left) = self.dispatch8_stage::<true>(&self.locate::<Eight>(&block));
+            super::coherent::write_lanes::<D, N, true, true>(&best, &mut out[c * 8..c * 8 + chunk.len()]);
+            let mut lanes = left.to_bitmask() & ((1 << chunk.len()) - 1);
+            while lanes != 0 {
+                let i = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                open.points[open.len] = block[i];
+                open.slots[open.len] = c * 8 + i;
+                open.len += 1;
+                if open.len == 8 {
+                    self.finish_open(&mut open, out);
+                }
+            }
+        }
+        if open.len > 0 {
+            self.finish_open(&mut open, out);
         }
         Ok(())
+    }
+
+    /// The whole search for the gathered open lanes, into their slots of
+    /// `out`; empties `open`.
+    #[inline(never)]
+    fn finish_open(&self, open: &mut Open<D>, out: &mut [Features32<D, N>]) {
+        let n = open.len;
+        for i in n..8 {
+            open.points[i] = open.points[0];
+        }
+        let mut results = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 8];
+        self.write8(&open.points, &mut results);
+        for (slot, r) in open.slots[..n].iter().zip(results) {
+            out[*slot] = r;
+        }
+        open.len = 0;
     }
 
     /// [`Simd::evaluate_slice`] on all cores (rayon), in tiles of [`TILE`]
@@ -315,6 +353,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let best = self.dispatch8(&located);
         super::Features8 { distance: best.rank, delta: best.delta, id: best.id }
     }
+}
+
+/// Samples of a slice left open by the first stage of the search, waiting
+/// for the whole search: their positions and their indices in the output.
+struct Open<const D: usize> {
+    points: [[f64; D]; 8],
+    slots: [usize; 8],
+    len: usize,
 }
 
 /// Lanes located by cell and fraction; invalid lanes get cell 0.

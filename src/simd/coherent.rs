@@ -769,7 +769,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 let cell: [[i64; 8]; D] = std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; 8]);
                 let fr: [[f32; 8]; D] = std::array::from_fn(|a| [f(a); 8]);
                 let at = Located::<One, D>::lanewise(cell, &fr, [true; 8]);
-                let one = self.search::<One, M, IDS, DELTAS>(metric, &at);
+                let one = self.search::<One, M, IDS, DELTAS, false>(metric, &at).0;
                 for j in 0..N {
                     rank[j][i] = one.rank[j];
                     id[j][i] = one.id[j];
