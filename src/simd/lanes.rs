@@ -428,4 +428,34 @@ mod tests {
             }
         }
     }
+
+    /// Eight lanes' minimum and maximum follow the one-lane rule (take b
+    /// only where b < a, or where a < b) bit for bit, signed zeros, NaNs and
+    /// infinities included, whichever instructions they compile to.
+    #[test]
+    fn lane_minimum_and_maximum_follow_the_one_lane_rule() {
+        let special = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            f32::NAN,
+            -f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MIN_POSITIVE,
+            3.5e-45,
+        ];
+        let n = special.len();
+        for i in 0..n * n {
+            let a: [f32; 8] = std::array::from_fn(|l| special[(i + l) % n]);
+            let b: [f32; 8] = std::array::from_fn(|l| special[(i / n + 3 * l) % n]);
+            let (lo, hi) = (Eight::min(f32x8::new(a), f32x8::new(b)), Eight::max(f32x8::new(a), f32x8::new(b)));
+            for l in 0..8 {
+                let what = format!("a = {:?}, b = {:?}", a[l], b[l]);
+                assert_eq!(lo.to_array()[l].to_bits(), One::min(a[l], b[l]).to_bits(), "min: {what}");
+                assert_eq!(hi.to_array()[l].to_bits(), One::max(a[l], b[l]).to_bits(), "max: {what}");
+            }
+        }
+    }
 }
