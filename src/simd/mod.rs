@@ -37,17 +37,16 @@
 //!   own cell and the 2^d − 1 cells around its nearest lattice corner, all
 //!   hashed up front as independent chains, then the same number of point
 //!   steps in every cell: the largest population of any cell in any lane,
-//!   so that the point loop's end repeats from cell to cell and predicts
-//!   (per-cell ends, which differ, mispredict); a point a lane's cell lacks
-//!   has rank +∞ there. The second stage is the far
+//!   so that the point loop's end repeats from cell to cell; a point a
+//!   lane's cell lacks has rank +∞ there. The second stage is the far
 //!   cells, each visited only for the lanes whose F_n could reach it
 //!   (Worley's pruning per lane), and skipped together when every lane's
 //!   F_n is within its nearest far face. A lane's result depends on that
 //!   lane alone, which is what makes one lane and eight lanes
 //!   bit-identical, and lets [`Simd::evaluate_slice`] run the first stage
-//!   on every block and gather the samples it leaves open (of random 3D
-//!   samples at λ 5, 1.9 % at F1, 8.3 % at F2, 33 % at F4) into blocks of
-//!   their own for the whole search.
+//!   on every block and gather the samples it leaves open (a few percent
+//!   at F1, more at higher orders; docs/simd.md) into blocks of their own
+//!   for the whole search.
 //! - **Exact.** After the block, a lane whose F_n is farther than the block's
 //!   outside (or as far, when IDs are asked for and a tie must be seen)
 //!   takes the wider search, shell by shell, masked to the lanes that still
@@ -578,7 +577,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // its nearest lattice corner): every cell hashed up front as
         // independent chains, then, cell by cell, the same number of point
         // steps, the largest population of any cell in any lane, so that the
-        // inner loop's trip count repeats and its end predicts. A point a
+        // inner loop's trip count repeats from cell to cell. A point a
         // lane's cell lacks has rank +∞ there. Cell c of the block is, on
         // axis a, the lane's near neighbour where bit a of c is set and its
         // own cell's column otherwise.
@@ -589,19 +588,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let mut most = L::f(-1.0);
         for c in 0..cells {
             h[c] = self.hash::<L>(std::array::from_fn(|a| terms[a][pick(c, a)]));
-            // The population's top byte, exact in f32, against each point's
-            // threshold; or, for an unsorted table, the count itself against
-            // each point's index.
-            let t = L::u24_to_f(L::u_shr24(h[c]));
-            top[c] = if self.sorted { t } else { self.counts::<L>(t) };
+            top[c] = self.population::<L>(h[c]);
             most = L::max(most, top[c]);
         }
-        let key = |p: &PointConstants<D>| L::f(if self.sorted { p.threshold } else { p.index });
-        let count = self.points.iter().take_while(|p| L::any(L::lt(key(p), most))).count();
+        let count = self.points.iter().take_while(|p| L::any(L::lt(self.key::<L>(p), most))).count();
         for c in 0..cells {
             let sh = std::array::from_fn(|a| shifted[a][pick(c, a)]);
             for p in &self.points[..count] {
-                self.point::<L, M, IDS, DELTAS>(metric, p, h[c], sh, L::lt(key(p), top[c]), &mut best);
+                self.point::<L, M, IDS, DELTAS>(metric, p, h[c], sh, L::lt(self.key::<L>(p), top[c]), &mut best);
             }
         }
         // Stage 2, the far cells, per lane only where one could still hold a
@@ -638,6 +632,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 self.widen::<L, M, IDS, DELTAS>(metric, at, open, &mut best);
             }
         }
+        // Every lane is final: no lane is open.
         (best, L::lt(one, L::f(0.0)))
     }
 
@@ -717,21 +712,38 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         needs: L::M,
         best: &mut Best<L, D, N>,
     ) {
-        // The population's top byte, exact in f32. Points are produced in
-        // index order while some lane that needs the cell has one more.
-        let top = L::u24_to_f(L::u_shr24(h));
-        let counts = if self.sorted { None } else { Some(self.counts::<L>(top)) };
+        // Points are produced in index order while some lane that needs the
+        // cell has one more.
+        let top = self.population::<L>(h);
         for p in &self.points {
-            let exists = match counts {
-                None => L::lt(L::f(p.threshold), top),
-                Some(c) => L::lt(L::f(p.index), c),
-            };
-            let active = L::and(needs, exists);
+            let active = L::and(needs, L::lt(self.key::<L>(p), top));
             if !L::any(active) {
                 break;
             }
             self.point::<L, M, IDS, DELTAS>(metric, p, h, shifted, active, best);
         }
+    }
+
+    /// What a cell's points are tested against, from its hash `h`: the
+    /// state's top byte, exact in f32, for a sorted table (point j exists
+    /// where its threshold is below it), or the population itself for an
+    /// unsorted one (point j exists where j is below it). See
+    /// [`Simd::key`].
+    #[inline(always)]
+    fn population<L: Lanes>(&self, h: L::U) -> L::F {
+        let top = L::u24_to_f(L::u_shr24(h));
+        if self.sorted {
+            top
+        } else {
+            self.counts::<L>(top)
+        }
+    }
+
+    /// Point `p`'s side of the existence test against [`Simd::population`]:
+    /// its threshold, or its index for an unsorted table.
+    #[inline(always)]
+    fn key<L: Lanes>(&self, p: &PointConstants<D>) -> L::F {
+        L::f(if self.sorted { p.threshold } else { p.index })
     }
 
     /// Point `p` of the cell with hash `h` (`shifted` is the sample minus
