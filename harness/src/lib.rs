@@ -89,7 +89,7 @@ impl<const D: usize> Kernel<D> for Reference<D> {
 
 impl<const D: usize, const N: usize> Kernel<D> for worley::simd::Simd<D, N> {
     fn name(&self) -> String {
-        "simd-f32x8".into()
+        format!("simd-f32x{}", worley::simd::SLICE_LANES)
     }
     fn config(&self) -> &Config {
         worley::simd::Simd::config(self)

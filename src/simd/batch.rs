@@ -2,9 +2,11 @@
 //! points given as a cell plus a fraction. Every entry point feeds the same
 //! 8-lane kernel, so a point gives the same bits whichever way it arrives.
 
-use super::{Features32, Located, Simd, UNIT};
+use super::{Best, Features32, Located, Simd, UNIT};
 use crate::definition::MAX_CELL_COORD;
-use crate::simd::lanes::{Eight, Lanes, One};
+#[cfg(target_feature = "avx512f")]
+use crate::simd::lanes::Sixteen;
+use crate::simd::lanes::{Eight, Lanes, One, WIDEST};
 
 /// A sample position the kernel accepts, converted to f64 user units.
 pub trait Point<const D: usize>: Copy {
@@ -143,8 +145,9 @@ impl std::error::Error for SizeError {}
 pub const TILE: usize = 4096;
 
 impl<const D: usize, const N: usize> Simd<D, N> {
-    /// Many samples into a caller's buffer, eight at a time (a tail shorter
-    /// than eight is padded). Results are the same as [`Simd::evaluate`]'s.
+    /// Many samples into a caller's buffer, sixteen at a time in a build
+    /// with AVX-512 and eight otherwise (a short tail is padded). Results
+    /// are the same as [`Simd::evaluate`]'s, bit for bit, in every build.
     ///
     /// # Errors
     /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
@@ -161,48 +164,77 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if out.len() < xs.len() {
             return Err(SizeError { needed: xs.len(), given: out.len() });
         }
-        // Scattered samples: every block of eight runs the first stage of
-        // the search (each lane's 2^d block), and the lanes it leaves open
-        // are gathered into blocks of their own for the whole search, so a
-        // far cell is visited for eight lanes that need it rather than
-        // masked inside every block. A lane's result depends on that lane
-        // alone, so this gives the bits of `write8` on any block.
-        let mut open = Open::<D> { points: [[0.0; D]; 8], slots: [0; 8], len: 0 };
-        for (c, chunk) in xs.chunks(8).enumerate() {
-            let mut block = [[0.0; D]; 8];
+        // Sixteen lanes where the build has AVX-512, eight otherwise (with
+        // the run-time AVX2 copy in a default build): the same operations
+        // per lane, so the same bits.
+        #[cfg(target_feature = "avx512f")]
+        self.slice_in_stages::<Sixteen, P>(
+            xs,
+            out,
+            |at| self.dispatch_stage::<Sixteen, true>(at),
+            |at| self.dispatch::<Sixteen>(at),
+        );
+        #[cfg(not(target_feature = "avx512f"))]
+        self.slice_in_stages::<Eight, P>(xs, out, |at| self.dispatch8_stage::<true>(at), |at| self.dispatch8(at));
+        Ok(())
+    }
+
+    /// Scattered samples in blocks of `L::N`: every block runs the first
+    /// stage of the search (`first`: each lane's 2^d block), and the lanes
+    /// it leaves open are gathered into blocks of their own for the whole
+    /// search (`whole`), so a far cell is visited for lanes that need it
+    /// rather than masked inside every block. A lane's result depends on
+    /// that lane alone, so this gives the bits of the whole search on any
+    /// block.
+    #[inline(always)]
+    fn slice_in_stages<L: Lanes, P: Point<D>>(
+        &self,
+        xs: &[P],
+        out: &mut [Features32<D, N>],
+        first: impl Fn(&Located<L, D>) -> (Best<L, D, N>, L::M),
+        whole: impl Fn(&Located<L, D>) -> Best<L, D, N>,
+    ) {
+        let mut open = Open::<D> { points: [[0.0; D]; WIDEST], slots: [0; WIDEST], len: 0 };
+        for (c, chunk) in xs.chunks(L::N).enumerate() {
+            let mut block = [[0.0; D]; WIDEST];
             for (b, p) in block.iter_mut().zip(chunk) {
                 *b = p.coordinates();
             }
-            let (best, left) = self.dispatch8_stage::<true>(&self.locate::<Eight>(&block));
-            super::coherent::write_lanes::<D, N, true, true>(&best, &mut out[c * 8..c * 8 + chunk.len()]);
-            let mut lanes = left.to_bitmask() & ((1 << chunk.len()) - 1);
+            let (best, left) = first(&self.locate::<L>(&block));
+            super::coherent::write_lanes::<L, D, N, true, true>(&best, &mut out[c * L::N..c * L::N + chunk.len()]);
+            let mut lanes = L::bits(left) & ((1 << chunk.len()) - 1);
             while lanes != 0 {
                 let i = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
                 open.points[open.len] = block[i];
-                open.slots[open.len] = c * 8 + i;
+                open.slots[open.len] = c * L::N + i;
                 open.len += 1;
-                if open.len == 8 {
-                    self.finish_open(&mut open, out);
+                if open.len == L::N {
+                    self.finish_open::<L>(&mut open, out, &whole);
                 }
             }
         }
         if open.len > 0 {
-            self.finish_open(&mut open, out);
+            self.finish_open::<L>(&mut open, out, &whole);
         }
-        Ok(())
     }
 
     /// The whole search for the gathered open lanes, into their slots of
     /// `out`; empties `open`.
     #[inline(never)]
-    fn finish_open(&self, open: &mut Open<D>, out: &mut [Features32<D, N>]) {
+    fn finish_open<L: Lanes>(
+        &self,
+        open: &mut Open<D>,
+        out: &mut [Features32<D, N>],
+        whole: &impl Fn(&Located<L, D>) -> Best<L, D, N>,
+    ) {
         let n = open.len;
-        for i in n..8 {
+        for i in n..L::N {
             open.points[i] = open.points[0];
         }
-        let mut results = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 8];
-        self.write8(&open.points, &mut results);
+        let mut results = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; WIDEST];
+        let best = whole(&self.locate::<L>(&open.points));
+        super::coherent::write_lanes::<L, D, N, true, true>(&best, &mut results[..L::N]);
         for (slot, r) in open.slots[..n].iter().zip(results) {
             out[*slot] = r;
         }
@@ -309,7 +341,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// Eight samples into up to eight results.
     #[inline]
     pub(super) fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
-        super::coherent::write_lanes::<D, N, true, true>(&self.dispatch8(&self.locate::<Eight>(block)), dst);
+        super::coherent::write_lanes::<Eight, D, N, true, true>(&self.dispatch8(&self.locate::<Eight>(block)), dst);
     }
 
     /// One sample given as a cell of the pattern (see
@@ -358,17 +390,17 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 /// Samples of a slice left open by the first stage of the search, waiting
 /// for the whole search: their positions and their indices in the output.
 struct Open<const D: usize> {
-    points: [[f64; D]; 8],
-    slots: [usize; 8],
+    points: [[f64; D]; WIDEST],
+    slots: [usize; WIDEST],
     len: usize,
 }
 
 /// Lanes located by cell and fraction; invalid lanes get cell 0.
 fn in_cell<L: Lanes, const D: usize>(cells: &[[i64; D]], fractions: &[[f32; D]]) -> Located<L, D> {
     let limit = MAX_CELL_COORD as u64;
-    let mut cell = [[0i64; 8]; D];
-    let mut f = [[0f32; 8]; D];
-    let mut valid = [false; 8];
+    let mut cell = [[0i64; WIDEST]; D];
+    let mut f = [[0f32; WIDEST]; D];
+    let mut valid = [false; WIDEST];
     for i in 0..L::N {
         let ok =
             fractions[i].iter().all(|v| (0.0..=1.0).contains(v)) && cells[i].iter().all(|c| c.unsigned_abs() <= limit);

@@ -59,7 +59,7 @@
 
 use wide::{f32x8, u32x8};
 
-use super::lanes::{Eight, Lanes, One};
+use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::{
     distance_of_rank, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski, Outputs,
     Simd, INVALID_ID, UNIT,
@@ -477,7 +477,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<Eight, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
-                    write_lanes::<D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
+                    write_lanes::<Eight, D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
             }
         }
@@ -766,9 +766,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                         }
                     },
                 );
-                let cell: [[i64; 8]; D] = std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; 8]);
-                let fr: [[f32; 8]; D] = std::array::from_fn(|a| [f(a); 8]);
-                let at = Located::<One, D>::lanewise(cell, &fr, [true; 8]);
+                let cell: [[i64; WIDEST]; D] =
+                    std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; WIDEST]);
+                let fr: [[f32; WIDEST]; D] = std::array::from_fn(|a| [f(a); WIDEST]);
+                let at = Located::<One, D>::lanewise(cell, &fr, [true; WIDEST]);
                 let one = self.search::<One, M, IDS, DELTAS, false>(metric, &at).0;
                 for j in 0..N {
                     rank[j][i] = one.rank[j];
@@ -817,16 +818,26 @@ fn min_max(v: &[i64]) -> (i64, i64) {
     v.iter().fold((i64::MAX, i64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)))
 }
 
-/// Up to eight lanes of a finished result into `dst`. Without `IDS` the
-/// IDs are written as [`INVALID_ID`] and without `DELTAS` the deltas as
+/// Up to [`Lanes::N`] lanes of a finished result into `dst`. Without `IDS`
+/// the IDs are written as [`INVALID_ID`] and without `DELTAS` the deltas as
 /// zero, which is what a result holds when they were not asked for and
 /// every lane is valid; the general caller passes both as true.
 #[inline(always)]
-pub(super) fn write_lanes<const D: usize, const N: usize, const IDS: bool, const DELTAS: bool>(
-    b: &Best<Eight, D, N>,
+pub(super) fn write_lanes<L: Lanes, const D: usize, const N: usize, const IDS: bool, const DELTAS: bool>(
+    b: &Best<L, D, N>,
     dst: &mut [Features32<D, N>],
 ) {
-    let distance = b.rank.map(|v| v.to_array());
+    let f = |v: L::F| {
+        let mut a = [0.0; WIDEST];
+        L::f_store(v, &mut a[..L::N]);
+        a
+    };
+    let u = |v: L::U| {
+        let mut a = [0; WIDEST];
+        L::u_store(v, &mut a[..L::N]);
+        a
+    };
+    let distance = b.rank.map(f);
     if !IDS && !DELTAS {
         for (i, o) in dst.iter_mut().enumerate() {
             *o = Features32 {
@@ -837,8 +848,8 @@ pub(super) fn write_lanes<const D: usize, const N: usize, const IDS: bool, const
         }
         return;
     }
-    let id = if IDS { b.id.map(|v| v.to_array()) } else { [[INVALID_ID; 8]; N] };
-    let delta = if DELTAS { b.delta.map(|d| d.map(|v| v.to_array())) } else { [[[0.0; 8]; D]; N] };
+    let id = if IDS { b.id.map(u) } else { [[INVALID_ID; WIDEST]; N] };
+    let delta = if DELTAS { b.delta.map(|d| d.map(f)) } else { [[[0.0; WIDEST]; D]; N] };
     for (i, o) in dst.iter_mut().enumerate() {
         o.distance = std::array::from_fn(|k| distance[k][i]);
         o.id = std::array::from_fn(|k| id[k][i]);

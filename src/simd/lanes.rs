@@ -1,14 +1,21 @@
 //! The lane abstraction the SIMD kernel is written over.
 //!
 //! The kernel is written once against [`Lanes`] and instantiated for
-//! [`One`] (plain `f32`/`u32`) and [`Eight`] (`wide`'s `f32x8`/`u32x8`). Every
-//! operation here is one IEEE operation per lane with the same result in
-//! every build: no fused multiply-add, no approximate reciprocal, no
+//! [`One`] (plain `f32`/`u32`), [`Eight`] (`wide`'s `f32x8`/`u32x8`) and
+//! [`Sixteen`] (`f32x16`/`u32x16`, which slices use in AVX-512 builds).
+//! Every operation here is one IEEE operation per lane with the same result
+//! in every build: no fused multiply-add, no approximate reciprocal, no
 //! horizontal reduction whose order could change. A single point evaluated
-//! through `One` and the same point in any lane of `Eight` are therefore
-//! bit-identical, in the default build and in an AVX2 build alike.
+//! through `One` and the same point in any lane of `Eight` or `Sixteen` are
+//! therefore bit-identical, in the default, AVX2 and AVX-512 builds alike.
+//! `Eight` and `Sixteen` are one macro over `wide`'s types of each width,
+//! so the two cannot drift apart.
 
-use wide::{f32x8, i32x8, u32x8};
+use wide::{f32x16, f32x8, i32x16, i32x8, u32x16, u32x8};
+
+/// The widest lane set's width: per-lane arrays in the kernel (cells,
+/// fractions, validity) are sized for it and used up to [`Lanes::N`].
+pub const WIDEST: usize = 16;
 
 /// A set of lanes: float, unsigned and mask types and the operations the
 /// kernel needs.
@@ -67,6 +74,8 @@ pub trait Lanes: Copy + 'static {
     fn or(a: Self::M, b: Self::M) -> Self::M;
     /// Any lane true.
     fn any(m: Self::M) -> bool;
+    /// Bit i set where lane i is true.
+    fn bits(m: Self::M) -> u32;
 
     /// a + b (wrapping)
     fn u_add(a: Self::U, b: Self::U) -> Self::U;
@@ -97,6 +106,11 @@ pub struct One;
 /// Eight lanes: `wide`'s 256-bit types.
 #[derive(Clone, Copy, Debug)]
 pub struct Eight;
+
+/// Sixteen lanes: `wide`'s 512-bit types, one AVX-512 register each where
+/// the build has `avx512f` and two 256-bit halves otherwise.
+#[derive(Clone, Copy, Debug)]
+pub struct Sixteen;
 
 impl Lanes for One {
     const N: usize = 1;
@@ -209,6 +223,10 @@ impl Lanes for One {
         m
     }
     #[inline(always)]
+    fn bits(m: bool) -> u32 {
+        u32::from(m)
+    }
+    #[inline(always)]
     fn u_add(a: u32, b: u32) -> u32 {
         a.wrapping_add(b)
     }
@@ -250,167 +268,180 @@ impl Lanes for One {
     }
 }
 
-impl Lanes for Eight {
-    const N: usize = 8;
-    type F = f32x8;
-    type U = u32x8;
-    type M = f32x8;
+/// The lanes of `wide`'s float and integer types of one width: the same
+/// code for eight and sixteen lanes, so that both follow one lane rule.
+macro_rules! wide_lanes {
+    ($name:ident, $n:literal, $f:ident, $u:ident, $i:ident, $from:ident) => {
+        impl Lanes for $name {
+            const N: usize = $n;
+            type F = $f;
+            type U = $u;
+            type M = $f;
 
-    #[inline(always)]
-    fn f(v: f32) -> f32x8 {
-        f32x8::splat(v)
-    }
-    #[inline(always)]
-    fn u(v: u32) -> u32x8 {
-        u32x8::splat(v)
-    }
-    #[inline(always)]
-    fn f_load(a: &[f32]) -> f32x8 {
-        let mut v = [0.0; 8];
-        v.copy_from_slice(&a[..8]);
-        f32x8::new(v)
-    }
-    #[inline(always)]
-    fn u_load(a: &[u32]) -> u32x8 {
-        let mut v = [0; 8];
-        v.copy_from_slice(&a[..8]);
-        u32x8::new(v)
-    }
-    #[inline(always)]
-    fn f_store(v: f32x8, out: &mut [f32]) {
-        out[..8].copy_from_slice(&v.to_array());
-    }
-    #[inline(always)]
-    fn u_store(v: u32x8, out: &mut [u32]) {
-        out[..8].copy_from_slice(&v.to_array());
-    }
-    #[inline(always)]
-    fn add(a: f32x8, b: f32x8) -> f32x8 {
-        a + b
-    }
-    #[inline(always)]
-    fn sub(a: f32x8, b: f32x8) -> f32x8 {
-        a - b
-    }
-    #[inline(always)]
-    fn mul(a: f32x8, b: f32x8) -> f32x8 {
-        a * b
-    }
-    #[inline(always)]
-    fn min(a: f32x8, b: f32x8) -> f32x8 {
-        // Same lane rule as `One::min`: take b only where b < a. On x86
-        // that is the minimum instruction with b first, in every build
-        // (`fast_min` is `minps` on SSE and AVX, and the same comparison in
-        // `wide`'s scalar code); elsewhere a comparison and a select.
-        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-        return b.fast_min(a);
-        #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
-        return b.simd_lt(a).select(b, a);
-    }
-    #[inline(always)]
-    fn max(a: f32x8, b: f32x8) -> f32x8 {
-        // Take b only where a < b, as `One::max`: `maxps` with b first.
-        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-        return b.fast_max(a);
-        #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
-        return a.simd_lt(b).select(b, a);
-    }
-    #[inline(always)]
-    fn abs(a: f32x8) -> f32x8 {
-        a.abs()
-    }
-    #[inline(always)]
-    fn sqrt(a: f32x8) -> f32x8 {
-        a.sqrt()
-    }
-    #[inline(always)]
-    fn lt(a: f32x8, b: f32x8) -> f32x8 {
-        a.simd_lt(b)
-    }
-    #[inline(always)]
-    fn le(a: f32x8, b: f32x8) -> f32x8 {
-        a.simd_le(b)
-    }
-    #[inline(always)]
-    fn eq(a: f32x8, b: f32x8) -> f32x8 {
-        a.simd_eq(b)
-    }
-    #[inline(always)]
-    fn u_lt(a: u32x8, b: u32x8) -> f32x8 {
-        // Unsigned order is signed order with the top bit flipped.
-        let flip = u32x8::splat(0x8000_0000);
-        let (x, y): (i32x8, i32x8) = (bytemuck::cast(a ^ flip), bytemuck::cast(b ^ flip));
-        bytemuck::cast(x.simd_lt(y))
-    }
-    #[inline(always)]
-    fn select(m: f32x8, a: f32x8, b: f32x8) -> f32x8 {
-        m.select(a, b)
-    }
-    #[inline(always)]
-    fn select_u(m: f32x8, a: u32x8, b: u32x8) -> u32x8 {
-        m.select(a, b)
-    }
-    #[inline(always)]
-    fn and(a: f32x8, b: f32x8) -> f32x8 {
-        a & b
-    }
-    #[inline(always)]
-    fn or(a: f32x8, b: f32x8) -> f32x8 {
-        a | b
-    }
-    #[inline(always)]
-    fn any(m: f32x8) -> bool {
-        m.any()
-    }
-    #[inline(always)]
-    fn u_add(a: u32x8, b: u32x8) -> u32x8 {
-        a + b
-    }
-    #[inline(always)]
-    fn u_mul(a: u32x8, b: u32x8) -> u32x8 {
-        a * b
-    }
-    #[inline(always)]
-    fn u_xor(a: u32x8, b: u32x8) -> u32x8 {
-        a ^ b
-    }
-    #[inline(always)]
-    fn u_and(a: u32x8, b: u32x8) -> u32x8 {
-        a & b
-    }
-    #[inline(always)]
-    fn u_min(a: u32x8, b: u32x8) -> u32x8 {
-        a.min(b)
-    }
-    #[inline(always)]
-    fn u_shr16(a: u32x8) -> u32x8 {
-        a >> 16_u32
-    }
-    #[inline(always)]
-    fn u_shr13(a: u32x8) -> u32x8 {
-        a >> 13_u32
-    }
-    #[inline(always)]
-    fn u_shr8(a: u32x8) -> u32x8 {
-        a >> 8_u32
-    }
-    #[inline(always)]
-    fn u_shr24(a: u32x8) -> u32x8 {
-        a >> 24_u32
-    }
-    #[inline(always)]
-    fn u24_to_f(a: u32x8) -> f32x8 {
-        let i: i32x8 = bytemuck::cast(a);
-        f32x8::from_i32x8(i)
-    }
+            #[inline(always)]
+            fn f(v: f32) -> $f {
+                $f::splat(v)
+            }
+            #[inline(always)]
+            fn u(v: u32) -> $u {
+                $u::splat(v)
+            }
+            #[inline(always)]
+            fn f_load(a: &[f32]) -> $f {
+                let mut v = [0.0; $n];
+                v.copy_from_slice(&a[..$n]);
+                $f::new(v)
+            }
+            #[inline(always)]
+            fn u_load(a: &[u32]) -> $u {
+                let mut v = [0; $n];
+                v.copy_from_slice(&a[..$n]);
+                $u::new(v)
+            }
+            #[inline(always)]
+            fn f_store(v: $f, out: &mut [f32]) {
+                out[..$n].copy_from_slice(&v.to_array());
+            }
+            #[inline(always)]
+            fn u_store(v: $u, out: &mut [u32]) {
+                out[..$n].copy_from_slice(&v.to_array());
+            }
+            #[inline(always)]
+            fn add(a: $f, b: $f) -> $f {
+                a + b
+            }
+            #[inline(always)]
+            fn sub(a: $f, b: $f) -> $f {
+                a - b
+            }
+            #[inline(always)]
+            fn mul(a: $f, b: $f) -> $f {
+                a * b
+            }
+            #[inline(always)]
+            fn min(a: $f, b: $f) -> $f {
+                // Same lane rule as `One::min`: take b only where b < a. On x86
+                // that is the minimum instruction with b first, in every build
+                // (`fast_min` is `minps` on SSE and AVX, and the same comparison in
+                // `wide`'s scalar code); elsewhere a comparison and a select.
+                #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+                return b.fast_min(a);
+                #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+                return b.simd_lt(a).select(b, a);
+            }
+            #[inline(always)]
+            fn max(a: $f, b: $f) -> $f {
+                // Take b only where a < b, as `One::max`: `maxps` with b first.
+                #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+                return b.fast_max(a);
+                #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+                return a.simd_lt(b).select(b, a);
+            }
+            #[inline(always)]
+            fn abs(a: $f) -> $f {
+                a.abs()
+            }
+            #[inline(always)]
+            fn sqrt(a: $f) -> $f {
+                a.sqrt()
+            }
+            #[inline(always)]
+            fn lt(a: $f, b: $f) -> $f {
+                a.simd_lt(b)
+            }
+            #[inline(always)]
+            fn le(a: $f, b: $f) -> $f {
+                a.simd_le(b)
+            }
+            #[inline(always)]
+            fn eq(a: $f, b: $f) -> $f {
+                a.simd_eq(b)
+            }
+            #[inline(always)]
+            fn u_lt(a: $u, b: $u) -> $f {
+                // Unsigned order is signed order with the top bit flipped.
+                let flip = $u::splat(0x8000_0000);
+                let (x, y): ($i, $i) = (bytemuck::cast(a ^ flip), bytemuck::cast(b ^ flip));
+                bytemuck::cast(x.simd_lt(y))
+            }
+            #[inline(always)]
+            fn select(m: $f, a: $f, b: $f) -> $f {
+                m.select(a, b)
+            }
+            #[inline(always)]
+            fn select_u(m: $f, a: $u, b: $u) -> $u {
+                m.select(a, b)
+            }
+            #[inline(always)]
+            fn and(a: $f, b: $f) -> $f {
+                a & b
+            }
+            #[inline(always)]
+            fn or(a: $f, b: $f) -> $f {
+                a | b
+            }
+            #[inline(always)]
+            fn any(m: $f) -> bool {
+                m.any()
+            }
+            #[inline(always)]
+            fn bits(m: $f) -> u32 {
+                m.to_bitmask()
+            }
+            #[inline(always)]
+            fn u_add(a: $u, b: $u) -> $u {
+                a + b
+            }
+            #[inline(always)]
+            fn u_mul(a: $u, b: $u) -> $u {
+                a * b
+            }
+            #[inline(always)]
+            fn u_xor(a: $u, b: $u) -> $u {
+                a ^ b
+            }
+            #[inline(always)]
+            fn u_and(a: $u, b: $u) -> $u {
+                a & b
+            }
+            #[inline(always)]
+            fn u_min(a: $u, b: $u) -> $u {
+                a.min(b)
+            }
+            #[inline(always)]
+            fn u_shr16(a: $u) -> $u {
+                a >> 16_u32
+            }
+            #[inline(always)]
+            fn u_shr13(a: $u) -> $u {
+                a >> 13_u32
+            }
+            #[inline(always)]
+            fn u_shr8(a: $u) -> $u {
+                a >> 8_u32
+            }
+            #[inline(always)]
+            fn u_shr24(a: $u) -> $u {
+                a >> 24_u32
+            }
+            #[inline(always)]
+            fn u24_to_f(a: $u) -> $f {
+                let i: $i = bytemuck::cast(a);
+                $f::$from(i)
+            }
+        }
+    };
 }
+
+wide_lanes!(Eight, 8, f32x8, u32x8, i32x8, from_i32x8);
+wide_lanes!(Sixteen, 16, f32x16, u32x16, i32x16, from_i32x16);
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
     /// The lane multiply, whichever instructions `wide` compiled it to, is
-    /// the wrapping product of every lane.
+    /// the wrapping product of every lane, in eight and in sixteen lanes.
     #[test]
     fn lane_multiply_is_the_wrapping_product() {
         let mut state = 0x1234_5678_9ABC_DEF0u64;
@@ -420,42 +451,56 @@ mod tests {
         };
         let edges = [0, 1, 0xFFFF, 0x1_0000, 0x8000_0000, u32::MAX, 0xFFFF_0000, 0x0000_FFFF];
         for round in 0..20_000 {
-            let a: [u32; 8] = std::array::from_fn(|i| if round == 0 { edges[i] } else { next() });
-            let b: [u32; 8] = std::array::from_fn(|i| if round < 8 { edges[(i + round) % 8] } else { next() });
-            let got = Eight::u_mul(u32x8::new(a), u32x8::new(b)).to_array();
-            for i in 0..8 {
-                assert_eq!(got[i], a[i].wrapping_mul(b[i]), "{:#x} * {:#x}", a[i], b[i]);
+            let a: [u32; 16] = std::array::from_fn(|i| if round == 0 { edges[i % 8] } else { next() });
+            let b: [u32; 16] = std::array::from_fn(|i| if round < 8 { edges[(i + round) % 8] } else { next() });
+            let mut eight = [0; 16];
+            Eight::u_store(Eight::u_mul(Eight::u_load(&a), Eight::u_load(&b)), &mut eight);
+            let mut sixteen = [0; 16];
+            Sixteen::u_store(Sixteen::u_mul(Sixteen::u_load(&a), Sixteen::u_load(&b)), &mut sixteen);
+            for i in 0..16 {
+                let want = a[i].wrapping_mul(b[i]);
+                if i < 8 {
+                    assert_eq!(eight[i], want, "eight lanes: {:#x} * {:#x}", a[i], b[i]);
+                }
+                assert_eq!(sixteen[i], want, "sixteen lanes: {:#x} * {:#x}", a[i], b[i]);
             }
         }
     }
 
-    /// Eight lanes' minimum and maximum follow the one-lane rule (take b
-    /// only where b < a, or where a < b) bit for bit, signed zeros, NaNs and
-    /// infinities included, whichever instructions they compile to.
+    /// Eight and sixteen lanes' minimum and maximum follow the one-lane
+    /// rule (take b only where b < a, or where a < b) bit for bit, signed
+    /// zeros, NaNs and infinities included, whichever instructions they
+    /// compile to.
     #[test]
     fn lane_minimum_and_maximum_follow_the_one_lane_rule() {
-        let special = [
-            0.0f32,
-            -0.0,
-            1.0,
-            -1.0,
-            f32::NAN,
-            -f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::MIN_POSITIVE,
-            3.5e-45,
-        ];
-        let n = special.len();
-        for i in 0..n * n {
-            let a: [f32; 8] = std::array::from_fn(|l| special[(i + l) % n]);
-            let b: [f32; 8] = std::array::from_fn(|l| special[(i / n + 3 * l) % n]);
-            let (lo, hi) = (Eight::min(f32x8::new(a), f32x8::new(b)), Eight::max(f32x8::new(a), f32x8::new(b)));
-            for l in 0..8 {
-                let what = format!("a = {:?}, b = {:?}", a[l], b[l]);
-                assert_eq!(lo.to_array()[l].to_bits(), One::min(a[l], b[l]).to_bits(), "min: {what}");
-                assert_eq!(hi.to_array()[l].to_bits(), One::max(a[l], b[l]).to_bits(), "max: {what}");
+        fn check<L: Lanes>() {
+            let special = [
+                0.0f32,
+                -0.0,
+                1.0,
+                -1.0,
+                f32::NAN,
+                -f32::NAN,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::MIN_POSITIVE,
+                3.5e-45,
+            ];
+            let n = special.len();
+            for i in 0..n * n {
+                let a: [f32; 16] = std::array::from_fn(|l| special[(i + l) % n]);
+                let b: [f32; 16] = std::array::from_fn(|l| special[(i / n + 3 * l) % n]);
+                let (mut lo, mut hi) = ([0.0; 16], [0.0; 16]);
+                L::f_store(L::min(L::f_load(&a), L::f_load(&b)), &mut lo);
+                L::f_store(L::max(L::f_load(&a), L::f_load(&b)), &mut hi);
+                for l in 0..L::N {
+                    let what = format!("{} lanes: a = {:?}, b = {:?}", L::N, a[l], b[l]);
+                    assert_eq!(lo[l].to_bits(), One::min(a[l], b[l]).to_bits(), "min: {what}");
+                    assert_eq!(hi[l].to_bits(), One::max(a[l], b[l]).to_bits(), "max: {what}");
+                }
             }
         }
+        check::<Eight>();
+        check::<Sixteen>();
     }
 }

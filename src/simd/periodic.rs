@@ -16,7 +16,7 @@
 //! [`Pattern::scale`](crate::Pattern::scale) to get cells.
 
 use super::{Features32, Features8, Located, Simd, UNIT};
-use crate::simd::lanes::{Eight, Lanes, One};
+use crate::simd::lanes::{Eight, Lanes, One, WIDEST};
 
 /// The largest period per axis, in cells (2^24: a reduced coordinate keeps
 /// at least 29 fraction bits in f64).
@@ -102,9 +102,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 /// remainder of a tiny negative x rounded up to P.
 fn wrap<L: Lanes, const D: usize>(xs: &[[f64; D]], period: &Period<D>) -> Located<L, D> {
     let p = period.0.map(i64::from);
-    let mut cell = [[0i64; 8]; D];
-    let mut f = [[0f32; 8]; D];
-    let mut valid = [false; 8];
+    let mut cell = [[0i64; WIDEST]; D];
+    let mut f = [[0f32; WIDEST]; D];
+    let mut valid = [false; WIDEST];
     for (i, x) in xs.iter().enumerate().take(L::N) {
         if x.iter().all(|v| v.is_finite()) {
             valid[i] = true;
