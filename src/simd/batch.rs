@@ -2,7 +2,7 @@
 //! points given as a cell plus a fraction. Every entry point feeds the same
 //! 8-lane kernel, so a point gives the same bits whichever way it arrives.
 
-use super::{Best, Features32, Located, Simd, UNIT};
+use super::{Best, Features32, Located, Simd, Stages, FIRST, REST, UNIT};
 use crate::definition::MAX_CELL_COORD;
 #[cfg(target_feature = "avx512f")]
 use crate::simd::lanes::Sixteen;
@@ -171,69 +171,78 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         self.slice_in_stages::<Sixteen, P>(
             xs,
             out,
-            |at| self.dispatch_stage::<Sixteen, true>(at),
-            |at| self.dispatch::<Sixteen>(at),
+            |at, start| self.dispatch_stage::<Sixteen, FIRST>(at, start),
+            |at, start| self.dispatch_stage::<Sixteen, REST>(at, start),
         );
         #[cfg(not(target_feature = "avx512f"))]
-        self.slice_in_stages::<Eight, P>(xs, out, |at| self.dispatch8_stage::<true>(at), |at| self.dispatch8(at));
+        self.slice_in_stages::<Eight, P>(
+            xs,
+            out,
+            |at, start| self.dispatch8_stage::<FIRST>(at, start),
+            |at, start| self.dispatch8_stage::<REST>(at, start),
+        );
         Ok(())
     }
 
     /// Scattered samples in blocks of `L::N`: every block runs the first
     /// stage of the search (`first`: each lane's 2^d block), and the lanes
-    /// it leaves open are gathered into blocks of their own for the whole
-    /// search (`whole`), so a far cell is visited for lanes that need it
-    /// rather than masked inside every block. A lane's result depends on
-    /// that lane alone, so this gives the bits of the whole search on any
-    /// block.
+    /// it leaves open are gathered, with their candidates so far, into
+    /// blocks of their own for the rest of the search (`rest`), so a far
+    /// cell is visited for lanes that need it rather than masked inside
+    /// every block. A lane's result depends on that lane alone, so this
+    /// gives the bits of the whole search on any block.
     #[inline(always)]
     fn slice_in_stages<L: Lanes, P: Point<D>>(
         &self,
         xs: &[P],
         out: &mut [Features32<D, N>],
-        first: impl Fn(&Located<L, D>) -> (Best<L, D, N>, L::M),
-        whole: impl Fn(&Located<L, D>) -> Best<L, D, N>,
+        first: impl Fn(&Located<L, D>, Best<L, D, N>) -> Stages<L, D, N>,
+        rest: impl Fn(&Located<L, D>, Best<L, D, N>) -> Stages<L, D, N>,
     ) {
-        let mut open = Open::<D> { points: [[0.0; D]; WIDEST], slots: [0; WIDEST], len: 0 };
+        let mut open = Open::<D, N>::empty();
         for (c, chunk) in xs.chunks(L::N).enumerate() {
             let mut block = [[0.0; D]; WIDEST];
             for (b, p) in block.iter_mut().zip(chunk) {
                 *b = p.coordinates();
             }
-            let (best, left) = first(&self.locate::<L>(&block));
+            let (best, left, raw) = first(&self.locate::<L>(&block), Best::empty());
             super::coherent::write_lanes::<L, D, N, true, true>(&best, &mut out[c * L::N..c * L::N + chunk.len()]);
             let mut lanes = L::bits(left) & ((1 << chunk.len()) - 1);
+            if lanes == 0 {
+                continue;
+            }
+            let held = Held::<D, N>::from_lanes::<L>(&raw);
             while lanes != 0 {
                 let i = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                open.points[open.len] = block[i];
-                open.slots[open.len] = c * L::N + i;
-                open.len += 1;
+                open.push(block[i], c * L::N + i, held.get(i));
                 if open.len == L::N {
-                    self.finish_open::<L>(&mut open, out, &whole);
+                    self.finish_open::<L>(&mut open, out, &rest);
                 }
             }
         }
         if open.len > 0 {
-            self.finish_open::<L>(&mut open, out, &whole);
+            self.finish_open::<L>(&mut open, out, &rest);
         }
     }
 
-    /// The whole search for the gathered open lanes, into their slots of
-    /// `out`; empties `open`.
+    /// The rest of the search for the gathered open lanes, from their
+    /// first stage's candidates, into their slots of `out`; empties `open`.
     #[inline(never)]
     fn finish_open<L: Lanes>(
         &self,
-        open: &mut Open<D>,
+        open: &mut Open<D, N>,
         out: &mut [Features32<D, N>],
-        whole: &impl Fn(&Located<L, D>) -> Best<L, D, N>,
+        rest: &impl Fn(&Located<L, D>, Best<L, D, N>) -> Stages<L, D, N>,
     ) {
         let n = open.len;
-        for i in n..L::N {
-            open.points[i] = open.points[0];
+        // Lanes past the gathered ones repeat the first; their results are
+        // dropped.
+        while open.len < L::N {
+            open.push(open.points[0], 0, open.held.get(0));
         }
         let mut results = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; WIDEST];
-        let best = whole(&self.locate::<L>(&open.points));
+        let (best, _, _) = rest(&self.locate::<L>(&open.points), open.held.to_lanes::<L>());
         super::coherent::write_lanes::<L, D, N, true, true>(&best, &mut results[..L::N]);
         for (slot, r) in open.slots[..n].iter().zip(results) {
             out[*slot] = r;
@@ -388,11 +397,92 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 }
 
 /// Samples of a slice left open by the first stage of the search, waiting
-/// for the whole search: their positions and their indices in the output.
-struct Open<const D: usize> {
+/// for the rest of it: their positions, their indices in the output and
+/// their candidates so far.
+struct Open<const D: usize, const N: usize> {
     points: [[f64; D]; WIDEST],
     slots: [usize; WIDEST],
+    held: Held<D, N>,
     len: usize,
+}
+
+impl<const D: usize, const N: usize> Open<D, N> {
+    fn empty() -> Self {
+        Open { points: [[0.0; D]; WIDEST], slots: [0; WIDEST], held: Held::empty(), len: 0 }
+    }
+
+    /// Appends the sample at `point` (output slot `slot`) with its
+    /// candidates `lane`.
+    fn push(&mut self, point: [f64; D], slot: usize, lane: Lane<D, N>) {
+        self.points[self.len] = point;
+        self.slots[self.len] = slot;
+        self.held.set(self.len, lane);
+        self.len += 1;
+    }
+}
+
+/// One lane's candidates.
+#[derive(Clone, Copy)]
+struct Lane<const D: usize, const N: usize> {
+    rank: [f32; N],
+    delta: [[f32; D]; N],
+    id: [u32; N],
+}
+
+/// The kernel's candidates ([`Best`]) as per-lane values, so that lanes of
+/// different blocks can be gathered into one.
+struct Held<const D: usize, const N: usize> {
+    rank: [[f32; WIDEST]; N],
+    delta: [[[f32; WIDEST]; D]; N],
+    id: [[u32; WIDEST]; N],
+}
+
+impl<const D: usize, const N: usize> Held<D, N> {
+    fn empty() -> Self {
+        Held { rank: [[0.0; WIDEST]; N], delta: [[[0.0; WIDEST]; D]; N], id: [[0; WIDEST]; N] }
+    }
+
+    #[inline(always)]
+    fn from_lanes<L: Lanes>(b: &Best<L, D, N>) -> Self {
+        let mut h = Self::empty();
+        for k in 0..N {
+            L::f_store(b.rank[k], &mut h.rank[k][..L::N]);
+            L::u_store(b.id[k], &mut h.id[k][..L::N]);
+            for a in 0..D {
+                L::f_store(b.delta[k][a], &mut h.delta[k][a][..L::N]);
+            }
+        }
+        h
+    }
+
+    /// Lane `i`'s candidates.
+    fn get(&self, i: usize) -> Lane<D, N> {
+        Lane {
+            rank: std::array::from_fn(|k| self.rank[k][i]),
+            delta: std::array::from_fn(|k| std::array::from_fn(|a| self.delta[k][a][i])),
+            id: std::array::from_fn(|k| self.id[k][i]),
+        }
+    }
+
+    /// Sets lane `i`'s candidates.
+    fn set(&mut self, i: usize, lane: Lane<D, N>) {
+        for k in 0..N {
+            self.rank[k][i] = lane.rank[k];
+            self.id[k][i] = lane.id[k];
+            for a in 0..D {
+                self.delta[k][a][i] = lane.delta[k][a];
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn to_lanes<L: Lanes>(&self) -> Best<L, D, N> {
+        Best {
+            rank: std::array::from_fn(|k| L::f_load(&self.rank[k][..L::N])),
+            delta: std::array::from_fn(|k| std::array::from_fn(|a| L::f_load(&self.delta[k][a][..L::N]))),
+            id: std::array::from_fn(|k| L::u_load(&self.id[k][..L::N])),
+        }
+    }
 }
 
 /// Lanes located by cell and fraction; invalid lanes get cell 0.

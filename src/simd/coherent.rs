@@ -62,7 +62,7 @@ use wide::{f32x8, u32x8};
 use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::{
     distance_of_rank, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski, Outputs,
-    Simd, INVALID_ID, UNIT,
+    Simd, INVALID_ID, UNIT, WHOLE,
 };
 use crate::config::{Metric, Mode};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
@@ -770,7 +770,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; WIDEST]);
                 let fr: [[f32; WIDEST]; D] = std::array::from_fn(|a| [f(a); WIDEST]);
                 let at = Located::<One, D>::lanewise(cell, &fr, [true; WIDEST]);
-                let one = self.search::<One, M, IDS, DELTAS, false>(metric, &at).0;
+                let one = self.search::<One, M, IDS, DELTAS, WHOLE>(metric, &at, Best::empty()).0;
                 for j in 0..N {
                     rank[j][i] = one.rank[j];
                     id[j][i] = one.id[j];

@@ -46,7 +46,7 @@
 //!   bit-identical, and lets [`Simd::evaluate_slice`] run the first stage
 //!   on every block and gather the samples it leaves open (a few percent
 //!   at F1, more at higher orders; docs/simd.md) into blocks of their own
-//!   for the whole search. Where the build has AVX-512 (`avx512f`), slices
+//!   that continue from their candidates with the second stage. Where the build has AVX-512 (`avx512f`), slices
 //!   run in blocks of sixteen lanes: one instruction covers twice the
 //!   samples, while the point loop's shared trip count, the largest of 128
 //!   populations instead of 64, grows from 10.9 to 11.6 steps per cell on
@@ -250,11 +250,25 @@ impl<L: Lanes, const D: usize> Located<L, D> {
 }
 
 /// The n best candidates per lane.
+#[derive(Clone, Copy)]
 struct Best<L: Lanes, const D: usize, const N: usize> {
     rank: [L::F; N],
     delta: [[L::F; D]; N],
     id: [L::U; N],
 }
+
+/// The whole search (see [`Simd::search`]).
+const WHOLE: u8 = 0;
+/// The first stage of the search only: each lane's 2^d block.
+const FIRST: u8 = 1;
+/// The rest of the search after [`FIRST`]: the far cells and the widening.
+const REST: u8 = 2;
+
+/// What a stage of the search gives: the lanes' results as a caller sees
+/// them (distances in user units, bad lanes marked), the lanes left open
+/// (after [`FIRST`]; none otherwise), and the candidates as the kernel holds
+/// them, from which [`REST`] continues.
+type Stages<L, const D: usize, const N: usize> = (Best<L, D, N>, <L as Lanes>::M, Best<L, D, N>);
 
 /// 2^24: lane geometry is held in units of one fixed-point step of a
 /// feature-point coordinate, so that a coordinate is its 24-bit integer
@@ -389,21 +403,24 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// same bits, in fewer instructions.
     #[inline(always)]
     fn dispatch8(&self, at: &Located<Eight, D>) -> Best<Eight, D, N> {
-        self.dispatch8_stage::<false>(at).0
+        self.dispatch8_stage::<WHOLE>(at, Best::empty()).0
     }
 
-    /// [`Simd::dispatch8`], or with `FIRST` only its first stage (see
-    /// [`Simd::search`]), which also gives the lanes it left open.
+    /// [`Simd::dispatch8`], or one stage of the search (see [`Stages`]).
     #[inline(always)]
-    fn dispatch8_stage<const FIRST: bool>(&self, at: &Located<Eight, D>) -> (Best<Eight, D, N>, f32x8) {
+    fn dispatch8_stage<const STAGE: u8>(
+        &self,
+        at: &Located<Eight, D>,
+        start: Best<Eight, D, N>,
+    ) -> Stages<Eight, D, N> {
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
         if runtime_avx2() {
             // SAFETY: `dispatch_avx2` requires AVX2 and nothing else, and
             // `runtime_avx2` has just seen the CPU report it.
             #[allow(unsafe_code)]
-            return unsafe { self.dispatch_avx2::<FIRST>(at) };
+            return unsafe { self.dispatch_avx2::<STAGE>(at, start) };
         }
-        self.dispatch_stage::<Eight, FIRST>(at)
+        self.dispatch_stage::<Eight, STAGE>(at, start)
     }
 
     /// [`Simd::dispatch`] in eight lanes, compiled with AVX2 enabled: `wide`
@@ -413,8 +430,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// other metrics go through the out-of-line `search_outputs`.
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[target_feature(enable = "avx2")]
-    fn dispatch_avx2<const FIRST: bool>(&self, at: &Located<Eight, D>) -> (Best<Eight, D, N>, f32x8) {
-        self.dispatch_stage::<Eight, FIRST>(at)
+    fn dispatch_avx2<const STAGE: u8>(&self, at: &Located<Eight, D>, start: Best<Eight, D, N>) -> Stages<Eight, D, N> {
+        self.dispatch_stage::<Eight, STAGE>(at, start)
     }
 
     /// Eight samples as lanes per axis.
@@ -493,26 +510,29 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// converts ranks to distances and marks bad lanes.
     #[inline(always)]
     fn dispatch<L: Lanes>(&self, at: &Located<L, D>) -> Best<L, D, N> {
-        self.dispatch_stage::<L, false>(at).0
+        self.dispatch_stage::<L, WHOLE>(at, Best::empty()).0
     }
 
-    /// [`Simd::dispatch`], or with `FIRST` only the first stage of the
-    /// search, with the lanes it left open.
+    /// [`Simd::dispatch`], or one stage of the search (see [`Stages`]),
+    /// from the candidates in `start`.
     #[inline(always)]
-    fn dispatch_stage<L: Lanes, const FIRST: bool>(&self, at: &Located<L, D>) -> (Best<L, D, N>, L::M) {
-        let (mut best, open) = match (self.config.metric, self.outputs) {
-            (Metric::Euclidean, Outputs::Distances) => self.search::<L, Euclid, false, false, FIRST>(Euclid, at),
-            (Metric::Euclidean, Outputs::Ids) => self.search::<L, Euclid, true, false, FIRST>(Euclid, at),
-            (Metric::Euclidean, Outputs::IdsAndDeltas) => self.search::<L, Euclid, true, true, FIRST>(Euclid, at),
-            (Metric::Manhattan, o) => self.search_outputs::<L, Manhattan, FIRST>(Manhattan, o, at),
-            (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev, FIRST>(Chebyshev, o, at),
-            (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski, FIRST>(Minkowski(p), o, at),
+    fn dispatch_stage<L: Lanes, const STAGE: u8>(&self, at: &Located<L, D>, start: Best<L, D, N>) -> Stages<L, D, N> {
+        let (raw, open) = match (self.config.metric, self.outputs) {
+            (Metric::Euclidean, Outputs::Distances) => self.search::<L, Euclid, false, false, STAGE>(Euclid, at, start),
+            (Metric::Euclidean, Outputs::Ids) => self.search::<L, Euclid, true, false, STAGE>(Euclid, at, start),
+            (Metric::Euclidean, Outputs::IdsAndDeltas) => {
+                self.search::<L, Euclid, true, true, STAGE>(Euclid, at, start)
+            }
+            (Metric::Manhattan, o) => self.search_outputs::<L, Manhattan, STAGE>(Manhattan, o, at, start),
+            (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev, STAGE>(Chebyshev, o, at, start),
+            (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski, STAGE>(Minkowski(p), o, at, start),
         };
+        let mut best = raw;
         self.finish::<L, true>(&mut best);
         if at.valid[..L::N].iter().any(|v| !v) {
             mark_invalid(&mut best, &at.valid);
         }
-        (best, open)
+        (best, open, raw)
     }
 
     /// Ranks in lane units to distances in user units, and deltas to user
@@ -535,16 +555,17 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// [`Simd::dispatch_avx2`]), and the other metrics run the build's own
     /// instructions.
     #[inline(never)]
-    fn search_outputs<L: Lanes, M: Metric32, const FIRST: bool>(
+    fn search_outputs<L: Lanes, M: Metric32, const STAGE: u8>(
         &self,
         m: M,
         o: Outputs,
         at: &Located<L, D>,
+        start: Best<L, D, N>,
     ) -> (Best<L, D, N>, L::M) {
         match o {
-            Outputs::Distances => self.search::<L, M, false, false, FIRST>(m, at),
-            Outputs::Ids => self.search::<L, M, true, false, FIRST>(m, at),
-            Outputs::IdsAndDeltas => self.search::<L, M, true, true, FIRST>(m, at),
+            Outputs::Distances => self.search::<L, M, false, false, STAGE>(m, at, start),
+            Outputs::Ids => self.search::<L, M, true, false, STAGE>(m, at, start),
+            Outputs::IdsAndDeltas => self.search::<L, M, true, true, STAGE>(m, at, start),
         }
     }
 
@@ -557,17 +578,21 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// so the lanes agree on which visits still matter and all of them can
     /// usually stop after the near cells.
     ///
-    /// With `FIRST`, only the first stage runs (the 2^d block) and the lanes
-    /// whose far cells could still hold a candidate are returned as open:
-    /// their results are not final. Without it every lane is final and the
-    /// mask returned is empty.
+    /// `STAGE` says which part runs, from the candidates in `start`:
+    /// [`WHOLE`] (from no candidate), [`FIRST`] (the 2^d block only; the
+    /// lanes whose far cells could still hold a candidate are returned as
+    /// open, and their results are not final) or [`REST`] (the far cells
+    /// and the widening, from a first stage's candidates: a lane then ends
+    /// with the bits [`WHOLE`] gives it). After [`WHOLE`] and [`REST`] every
+    /// lane is final and the mask returned is empty.
     #[inline(always)]
-    fn search<L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool, const FIRST: bool>(
+    fn search<L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool, const STAGE: u8>(
         &self,
         metric: M,
         at: &Located<L, D>,
+        start: Best<L, D, N>,
     ) -> (Best<L, D, N>, L::M) {
-        let mut best = Best::<L, D, N>::empty();
+        let mut best = start;
         let one = L::f(UNIT);
         // Per axis, indexed by the mirrored offset + 1 (near, own, far): the
         // axis word, the sample minus the cell's corner, and the metric's
@@ -594,21 +619,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // lane's cell lacks has rank +∞ there. Cell c of the block is, on
         // axis a, the lane's near neighbour where bit a of c is set and its
         // own cell's column otherwise.
-        let cells = 1usize << D;
-        let pick = |c: usize, a: usize| 1 - ((c >> a) & 1);
-        let mut h = [L::u(0); 16];
-        let mut top = [L::f(0.0); 16];
-        let mut most = L::f(-1.0);
-        for c in 0..cells {
-            h[c] = self.hash::<L>(std::array::from_fn(|a| terms[a][pick(c, a)]));
-            top[c] = self.population::<L>(h[c]);
-            most = L::max(most, top[c]);
-        }
-        let count = self.points.iter().take_while(|p| L::any(L::lt(self.key::<L>(p), most))).count();
-        for c in 0..cells {
-            let sh = std::array::from_fn(|a| shifted[a][pick(c, a)]);
-            for p in &self.points[..count] {
-                self.point::<L, M, IDS, DELTAS>(metric, p, h[c], sh, L::lt(self.key::<L>(p), top[c]), &mut best);
+        if STAGE != REST {
+            let cells = 1usize << D;
+            let pick = |c: usize, a: usize| 1 - ((c >> a) & 1);
+            let mut h = [L::u(0); 16];
+            let mut top = [L::f(0.0); 16];
+            let mut most = L::f(-1.0);
+            for c in 0..cells {
+                h[c] = self.hash::<L>(std::array::from_fn(|a| terms[a][pick(c, a)]));
+                top[c] = self.population::<L>(h[c]);
+                most = L::max(most, top[c]);
+            }
+            let count = self.points.iter().take_while(|p| L::any(L::lt(self.key::<L>(p), most))).count();
+            for c in 0..cells {
+                let sh = std::array::from_fn(|a| shifted[a][pick(c, a)]);
+                for p in &self.points[..count] {
+                    self.point::<L, M, IDS, DELTAS>(metric, p, h[c], sh, L::lt(self.key::<L>(p), top[c]), &mut best);
+                }
             }
         }
         // Stage 2, the far cells, per lane only where one could still hold a
@@ -619,7 +646,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             nearest_far = L::min(nearest_far, g[2]);
         }
         let far = may_enter::<L, IDS>(nearest_far, best.rank[N - 1]);
-        if FIRST {
+        if STAGE == FIRST {
             return (best, far);
         }
         if L::any(far) {
@@ -1199,7 +1226,7 @@ mod runtime_avx2_tests {
                 let plain = kernel.dispatch::<Eight>(&located);
                 // SAFETY: `runtime_avx2` returned true above.
                 #[allow(unsafe_code)]
-                let avx2 = unsafe { kernel.dispatch_avx2::<false>(&located).0 };
+                let avx2 = unsafe { kernel.dispatch_avx2::<WHOLE>(&located, Best::empty()).0 };
                 for k in 0..N {
                     let what = format!("{outputs:?} F{} at batch {batch}", k + 1);
                     let bits = |v: f32x8| v.to_array().map(f32::to_bits);
