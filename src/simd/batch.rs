@@ -1,6 +1,7 @@
 //! Batches for the SIMD kernel: slices, regular grids, rayon tiles and
 //! points given as a cell plus a fraction. Every entry point feeds the same
-//! 8-lane kernel, so a point gives the same bits whichever way it arrives.
+//! kernel (eight lanes, or sixteen for slices in an AVX-512 build), so a
+//! point gives the same bits whichever way it arrives.
 
 use super::{Best, Features32, Located, Simd, Stages, FIRST, REST, UNIT};
 use crate::definition::MAX_CELL_COORD;
