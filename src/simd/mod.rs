@@ -46,11 +46,11 @@
 //!   bit-identical, and lets [`Simd::evaluate_slice`] run the first stage
 //!   on every block and gather the samples it leaves open (a few percent
 //!   at F1, more at higher orders; docs/simd.md) into blocks of their own
-//!   that continue from their candidates with the second stage. Where the build has AVX-512 (`avx512f`), slices
-//!   run in blocks of sixteen lanes: one instruction covers twice the
-//!   samples, while the point loop's shared trip count, the largest of 128
-//!   populations instead of 64, grows from 10.9 to 11.6 steps per cell on
-//!   average at λ 5.
+//!   that continue from their candidates with the second stage. Where
+//!   the build has AVX-512 (`avx512f`), slices run in blocks of sixteen
+//!   lanes: one instruction covers twice the samples, while the point
+//!   loop's shared trip count, the largest of 128 populations instead of
+//!   64, grows from 10.9 to 11.6 steps per cell on average at λ 5.
 //! - **Exact.** After the block, a lane whose F_n is farther than the block's
 //!   outside (or as far, when IDs are asked for and a tie must be seen)
 //!   takes the wider search, shell by shell, masked to the lanes that still
