@@ -56,7 +56,9 @@
 //! `wide` fixes its instructions when it is compiled: build with
 //! `RUSTFLAGS="-C target-cpu=native"` (or `x86-64-v3`) for AVX2. A build
 //! without target flags on x86_64 still runs the Euclidean 8-lane kernels
-//! recompiled for AVX2 when the CPU has it ([`simd::runtime_avx2`]).
+//! recompiled for AVX2 when the CPU has it ([`simd::runtime_avx2`]), and
+//! Euclidean slices in sixteen AVX-512 lanes when the CPU has AVX-512
+//! ([`simd::runtime_avx512`]).
 //! [`simd_level`] says which path a call takes:
 //!
 //! ```
@@ -102,8 +104,9 @@
 //! The harness that checks all of this against a brute-force oracle is the
 //! `worley-harness` crate beside this one; the `worley` command is
 //! `worley-cli`.
-// One fenced exception: the call into the AVX2 copy of the 8-lane kernel
-// after the CPU check (`simd::runtime_avx2`).
+// Two fenced exceptions: the call into the AVX2 copy of the 8-lane kernel
+// after the CPU check (`simd::runtime_avx2`), and the module `simd::avx512`
+// (AVX-512 intrinsics behind `simd::runtime_avx512`).
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 

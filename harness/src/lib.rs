@@ -89,7 +89,7 @@ impl<const D: usize> Kernel<D> for Reference<D> {
 
 impl<const D: usize, const N: usize> Kernel<D> for worley::simd::Simd<D, N> {
     fn name(&self) -> String {
-        format!("simd-f32x{}", worley::simd::SLICE_LANES)
+        format!("simd-f32x{}", self.slice_lanes())
     }
     fn config(&self) -> &Config {
         worley::simd::Simd::config(self)

@@ -1,7 +1,8 @@
 //! Batches for the SIMD kernel: slices, regular grids, rayon tiles and
 //! points given as a cell plus a fraction. Every entry point feeds the same
-//! kernel (eight lanes, or sixteen for slices in an AVX-512 build), so a
-//! point gives the same bits whichever way it arrives.
+//! kernel (eight lanes, or sixteen for slices where the build or, for the
+//! Euclidean metric, the CPU has AVX-512), so a point gives the same bits
+//! whichever way it arrives.
 
 use super::{Best, Features32, Located, Simd, Stages, FIRST, REST, UNIT};
 use crate::definition::MAX_CELL_COORD;
@@ -146,9 +147,11 @@ impl std::error::Error for SizeError {}
 pub const TILE: usize = 4096;
 
 impl<const D: usize, const N: usize> Simd<D, N> {
-    /// Many samples into a caller's buffer, sixteen at a time in a build
-    /// with AVX-512 and eight otherwise (a short tail is padded). Results
-    /// are the same as [`Simd::evaluate`]'s, bit for bit, in every build.
+    /// Many samples into a caller's buffer, sixteen at a time where the
+    /// build has AVX-512 or the metric is Euclidean and the CPU has it, and
+    /// eight otherwise ([`Simd::slice_lanes`]; a short tail is padded).
+    /// Results are the same as [`Simd::evaluate`]'s, bit for bit, in every
+    /// build and on every CPU.
     ///
     /// # Errors
     /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
@@ -175,6 +178,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             |at, start| self.dispatch_stage::<Sixteen, FIRST>(at, start),
             |at, start| self.dispatch_stage::<Sixteen, REST>(at, start),
         );
+        // A default build on a CPU with AVX-512 runs the sixteen lanes an
+        // AVX-512 build runs, compiled for them at run time.
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
+        if super::avx512::evaluate_slice(self, xs, out) {
+            return Ok(());
+        }
         #[cfg(not(target_feature = "avx512f"))]
         self.slice_in_stages::<Eight, P>(
             xs,
@@ -193,7 +202,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// every block. A lane's result depends on that lane alone, so this
     /// gives the bits of the whole search on any block.
     #[inline(always)]
-    fn slice_in_stages<L: Lanes, P: Point<D>>(
+    pub(super) fn slice_in_stages<L: Lanes, P: Point<D>>(
         &self,
         xs: &[P],
         out: &mut [Features32<D, N>],
@@ -229,7 +238,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 
     /// The rest of the search for the gathered open lanes, from their
     /// first stage's candidates, into their slots of `out`; empties `open`.
-    #[inline(never)]
+    /// Inlined, so that the run-time AVX-512 copy compiles it with its own
+    /// instructions.
+    #[inline(always)]
     fn finish_open<L: Lanes>(
         &self,
         open: &mut Open<D, N>,
@@ -479,9 +490,9 @@ impl<const D: usize, const N: usize> Held<D, N> {
     #[inline(always)]
     fn to_lanes<L: Lanes>(&self) -> Best<L, D, N> {
         Best {
-            rank: std::array::from_fn(|k| L::f_load(&self.rank[k][..L::N])),
-            delta: std::array::from_fn(|k| std::array::from_fn(|a| L::f_load(&self.delta[k][a][..L::N]))),
-            id: std::array::from_fn(|k| L::u_load(&self.id[k][..L::N])),
+            rank: super::per_axis(|k| L::f_load(&self.rank[k][..L::N])),
+            delta: super::per_axis(|k| super::per_axis(|a| L::f_load(&self.delta[k][a][..L::N]))),
+            id: super::per_axis(|k| L::u_load(&self.id[k][..L::N])),
         }
     }
 }

@@ -827,17 +827,12 @@ pub(super) fn write_lanes<L: Lanes, const D: usize, const N: usize, const IDS: b
     b: &Best<L, D, N>,
     dst: &mut [Features32<D, N>],
 ) {
-    let f = |v: L::F| {
-        let mut a = [0.0; WIDEST];
-        L::f_store(v, &mut a[..L::N]);
-        a
-    };
-    let u = |v: L::U| {
-        let mut a = [0; WIDEST];
-        L::u_store(v, &mut a[..L::N]);
-        a
-    };
-    let distance = b.rank.map(f);
+    // Stores in loops rather than array `map`s: the maps stayed out-of-line
+    // calls in the run-time AVX-512 copy, compiled without its instructions.
+    let mut distance = [[0.0; WIDEST]; N];
+    for (k, lanes) in distance.iter_mut().enumerate() {
+        L::f_store(b.rank[k], &mut lanes[..L::N]);
+    }
     if !IDS && !DELTAS {
         for (i, o) in dst.iter_mut().enumerate() {
             *o = Features32 {
@@ -848,8 +843,16 @@ pub(super) fn write_lanes<L: Lanes, const D: usize, const N: usize, const IDS: b
         }
         return;
     }
-    let id = if IDS { b.id.map(u) } else { [[INVALID_ID; WIDEST]; N] };
-    let delta = if DELTAS { b.delta.map(|d| d.map(f)) } else { [[[0.0; WIDEST]; D]; N] };
+    let mut id = [[INVALID_ID; WIDEST]; N];
+    let mut delta = [[[0.0; WIDEST]; D]; N];
+    for k in 0..N {
+        if IDS {
+            L::u_store(b.id[k], &mut id[k][..L::N]);
+        }
+        for a in (0..D).filter(|_| DELTAS) {
+            L::f_store(b.delta[k][a], &mut delta[k][a][..L::N]);
+        }
+    }
     for (i, o) in dst.iter_mut().enumerate() {
         o.distance = std::array::from_fn(|k| distance[k][i]);
         o.id = std::array::from_fn(|k| id[k][i]);

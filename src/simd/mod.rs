@@ -85,14 +85,27 @@
 //! ([`runtime_avx2`]). `wide`'s SSE2 code stays what it is, but LLVM lowers
 //! it again there: the 32-bit lane multiply, a scalar fallback on SSE2,
 //! becomes `vpmulld`, and VEX encodings drop register copies. Calling that
-//! function is the crate's one `unsafe` operation, fenced by the CPU check;
-//! it took the default build's 3D F1 from 7.9 to 10.8 M samples/s on random
+//! function is one of the crate's two fenced `unsafe` operations, behind the
+//! CPU check; it took the default build's 3D F1 from 7.9 to 10.8 M samples/s on random
 //! points (one thread). A unit test keeps the two copies bit for bit equal.
 //! The other metrics' kernels stay out of the copy and run the build's own
 //! instructions: copying all twelve kernels (four metrics, three output
 //! choices) doubled the optimised build of the crate, and the Euclidean
 //! metric is the one the speed figures are about.
+//!
+//! Where the CPU also has AVX-512, a build without it runs Euclidean slices
+//! ([`Simd::evaluate_slice`]) in sixteen AVX-512 lanes chosen at run time
+//! ([`runtime_avx512`]): the one kernel instantiated over a private lane set
+//! of AVX-512 intrinsics, compiled inside a function with the x86-64-v4
+//! features. Recompiling `wide`'s code cannot get there (its sixteen lanes
+//! are four SSE registers in such a build), and lanes of plain arrays left
+//! to the compiler's vectoriser ran slower than the AVX2 copy; the module
+//! `avx512` keeps the measurements and its safety argument. It is the
+//! other fenced `unsafe` operation, and unit tests hold it to the one-lane
+//! rule per operation and to the eight- and one-lane bits per slice.
 
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
+mod avx512;
 pub mod batch;
 mod coherent;
 pub mod lanes;
@@ -108,15 +121,14 @@ use crate::definition::{axis_term, lcg_jump, Pattern, AXIS_MUL, FRACTION_BITS, I
 use crate::reference::{shell, MAX_SHELLS};
 use lanes::{Eight, Lanes, One, WIDEST};
 
-/// Lanes per block in [`Simd::evaluate_slice`] in this build: sixteen where
-/// AVX-512 (`avx512f`) is compiled in, eight otherwise.
-pub const SLICE_LANES: usize = if cfg!(target_feature = "avx512f") { 16 } else { 8 };
-
-/// The SIMD instructions the kernels run: those compiled in, or AVX2
-/// chosen at run time in a build without it (see [`runtime_avx2`]).
+/// The SIMD instructions the kernels run: those compiled in, or AVX-512 and
+/// AVX2 chosen at run time in a build without them (see [`runtime_avx512`]
+/// and [`runtime_avx2`]).
 pub fn simd_level() -> &'static str {
     if cfg!(target_feature = "avx512f") {
         "avx512f (slices in 16 lanes of 512 bits; 8-lane calls and grids on AVX2 paths)"
+    } else if runtime_avx512() {
+        "avx512f at run time (a build without it: Euclidean slices run 16 AVX-512 lanes chosen because the CPU has them; Euclidean 8-lane calls and grids run their AVX2 copy)"
     } else if cfg!(target_feature = "avx2") {
         "avx2"
     } else if runtime_avx2() {
@@ -143,6 +155,39 @@ pub fn runtime_avx2() -> bool {
     {
         false
     }
+}
+
+/// Whether [`Simd::evaluate_slice`] runs the Euclidean kernel in sixteen
+/// lanes compiled for AVX-512 at run time: true when this build was
+/// compiled without AVX-512, the target is x86_64 and the CPU reports
+/// AVX-512 (F, BW, DQ and VL, the x86-64-v4 set). A build with AVX-512
+/// compiled in runs its own sixteen lanes and gives false.
+pub fn runtime_avx512() -> bool {
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512bw")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+    }
+    #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx512f"))))]
+    {
+        false
+    }
+}
+
+/// `[f(0), f(1), …]` for the `D` axes (`D ≥ 1`): `array::from_fn` as a
+/// counted loop. The kernel uses it, or plain loops, where a lane set is
+/// built per axis: in the run-time AVX-512 copy of a default build the
+/// iterator machinery behind `from_fn` stayed an out-of-line call compiled
+/// without the caller's instructions.
+#[inline(always)]
+fn per_axis<T: Copy, const D: usize>(mut f: impl FnMut(usize) -> T) -> [T; D] {
+    let mut r = [f(0); D];
+    for (a, slot) in r.iter_mut().enumerate().skip(1) {
+        *slot = f(a);
+    }
+    r
 }
 
 /// Which outputs a call computes.
@@ -238,10 +283,8 @@ impl<L: Lanes, const D: usize> Located<L, D> {
         period: Option<[i64; D]>,
     ) -> Self {
         Located {
-            words: std::array::from_fn(|a| {
-                std::array::from_fn(|o| words::<L>(a, &cell[a], o as i64 - 1, period.map(|p| p[a])))
-            }),
-            f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
+            words: per_axis(|a| per_axis(|o| words::<L>(a, &cell[a], o as i64 - 1, period.map(|p| p[a])))),
+            f: per_axis(|a| L::f_load(&f[a][..L::N])),
             cells: Cells::Full(cell),
             valid,
             period,
@@ -434,6 +477,24 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         self.dispatch_stage::<Eight, STAGE>(at, start)
     }
 
+    /// Lanes per block in [`Simd::evaluate_slice`] for this kernel on this
+    /// CPU: sixteen where AVX-512 is compiled in, or, for the Euclidean
+    /// metric, where the CPU has it ([`runtime_avx512`]); eight otherwise.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.slice_lanes() == 8 || basis.slice_lanes() == 16);
+    /// ```
+    pub fn slice_lanes(&self) -> usize {
+        let runtime = self.config.metric == Metric::Euclidean && runtime_avx512();
+        if cfg!(target_feature = "avx512f") || runtime {
+            16
+        } else {
+            8
+        }
+    }
+
     /// Eight samples as lanes per axis.
     ///
     /// ```
@@ -475,17 +536,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if !fast {
             return self.locate_lanewise(xs);
         }
-        Located {
-            words: std::array::from_fn(|a| {
-                let t = L::u_load(&lo[a][..L::N]);
-                // Written out: an array `map` here stayed a call with copies.
-                [word::<L>(a, L::u_add(t, L::u(u32::MAX))), word::<L>(a, t), word::<L>(a, L::u_add(t, L::u(1)))]
-            }),
-            f: std::array::from_fn(|a| L::f_load(&f[a][..L::N])),
-            cells: Cells::Low(std::array::from_fn(|a| L::u_load(&lo[a][..L::N]))),
-            valid: [true; WIDEST],
-            period: None,
+        let (mut words, mut lanes, mut low) = ([[L::u(0); 3]; D], [L::f(0.0); D], [L::u(0); D]);
+        for a in 0..D {
+            let t = L::u_load(&lo[a][..L::N]);
+            // Written out: an array `map` here stayed a call with copies.
+            words[a] = [word::<L>(a, L::u_add(t, L::u(u32::MAX))), word::<L>(a, t), word::<L>(a, L::u_add(t, L::u(1)))];
+            lanes[a] = L::f_load(&f[a][..L::N]);
+            low[a] = t;
         }
+        Located { words, f: lanes, cells: Cells::Low(low), valid: [true; WIDEST], period: None }
     }
 
     #[inline(never)]
@@ -626,13 +685,13 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             let mut top = [L::f(0.0); 16];
             let mut most = L::f(-1.0);
             for c in 0..cells {
-                h[c] = self.hash::<L>(std::array::from_fn(|a| terms[a][pick(c, a)]));
+                h[c] = self.hash::<L>(per_axis(|a| terms[a][pick(c, a)]));
                 top[c] = self.population::<L>(h[c]);
                 most = L::max(most, top[c]);
             }
             let count = self.points.iter().take_while(|p| L::any(L::lt(self.key::<L>(p), most))).count();
             for c in 0..cells {
-                let sh = std::array::from_fn(|a| shifted[a][pick(c, a)]);
+                let sh = per_axis(|a| shifted[a][pick(c, a)]);
                 for p in &self.points[..count] {
                     self.point::<L, M, IDS, DELTAS>(metric, p, h[c], sh, L::lt(self.key::<L>(p), top[c]), &mut best);
                 }
@@ -651,7 +710,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
         if L::any(far) {
             for offset in &self.block[self.near..] {
-                let index: [usize; D] = std::array::from_fn(|a| (offset[a] + 1) as usize);
+                let index: [usize; D] = per_axis(|a| (offset[a] + 1) as usize);
                 let mut rank = gap[0][index[0]];
                 for a in 1..D {
                     rank = metric.fold::<L>(rank, gap[a][index[a]]);
@@ -660,8 +719,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 if !L::any(needs) {
                     continue;
                 }
-                let h = self.hash::<L>(std::array::from_fn(|a| terms[a][index[a]]));
-                let sh: [L::F; D] = std::array::from_fn(|a| shifted[a][index[a]]);
+                let h = self.hash::<L>(per_axis(|a| terms[a][index[a]]));
+                let sh: [L::F; D] = per_axis(|a| shifted[a][index[a]]);
                 self.visit::<L, M, IDS, DELTAS>(metric, h, sh, needs, &mut best);
             }
         }
@@ -687,7 +746,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     ) {
         let cell = match &at.cells {
             Cells::Full(cell) => *cell,
-            Cells::Low(low) => std::array::from_fn(|a| {
+            Cells::Low(low) => per_axis(|a| {
                 let mut lo = [0u32; WIDEST];
                 L::u_store(low[a], &mut lo[..L::N]);
                 lo.map(|t| i64::from(t as i32))
@@ -695,8 +754,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         };
         for r in 2..=MAX_SHELLS {
             for offset in shell::<D>(r) {
-                let t: [L::U; D] = std::array::from_fn(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
-                let gaps: [L::F; D] = std::array::from_fn(|a| {
+                let t: [L::U; D] = per_axis(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
+                let gaps: [L::F; D] = per_axis(|a| {
                     let o = offset[a];
                     if o > 0 {
                         L::sub(L::f(o as f32 * UNIT), at.f[a])
@@ -708,7 +767,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 });
                 let needs = L::and(open, may_enter::<L, IDS>(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
                 if L::any(needs) {
-                    let sh: [L::F; D] = std::array::from_fn(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
+                    let sh: [L::F; D] = per_axis(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
                     self.visit::<L, M, IDS, DELTAS>(metric, self.hash::<L>(t), sh, needs, best);
                 }
             }
@@ -799,11 +858,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         active: L::M,
         best: &mut Best<L, D, N>,
     ) {
-        let delta: [L::F; D] = std::array::from_fn(|a| {
+        // A loop, not a closure: a closure stays an out-of-line call where
+        // the lanes are plain arrays (see `per_axis`).
+        let mut delta = shifted;
+        for (a, d) in delta.iter_mut().enumerate() {
             let (am, cm) = p.coordinate[a];
             let s = L::u_add(L::u_mul(h, L::u(am)), L::u(cm));
-            L::sub(shifted[a], L::u24_to_f(L::u_shr8(s)))
-        });
+            *d = L::sub(*d, L::u24_to_f(L::u_shr8(s)));
+        }
         let rank = L::select(active, metric.rank::<L, D>(&delta), L::f(f32::INFINITY));
         let id = if IDS {
             let (am, cm) = p.id;
