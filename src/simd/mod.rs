@@ -176,8 +176,8 @@ pub fn runtime_avx512() -> bool {
     }
 }
 
-/// `[f(0), f(1), …]` for the `D` axes (`D ≥ 1`): `array::from_fn` as a
-/// counted loop. The kernel uses it, or plain loops, where a lane set is
+/// `[f(0), f(1), …, f(D − 1)]` (`D ≥ 1`; per axis, or per order where a
+/// `Best` is built): `array::from_fn` as a counted loop. The kernel uses it, or plain loops, where a lane set is
 /// built per axis: in the run-time AVX-512 copy of a default build the
 /// iterator machinery behind `from_fn` stayed an out-of-line call compiled
 /// without the caller's instructions.
