@@ -246,7 +246,7 @@ mod tests {
     use super::*;
     use crate::config::{Config, Mode};
     use crate::simd::lanes::{Eight, One};
-    use crate::simd::Outputs;
+    use crate::simd::{sample_point, Outputs};
 
     /// Every operation of the AVX-512 lanes gives, lane by lane, the bits of
     /// the one-lane operation, on special and random values (signed zeros,
@@ -370,11 +370,6 @@ mod tests {
         assert_eq!(L::any(m), (0..16).any(|l| One::lt(fa[l], fb[l])));
         assert_eq!(L::bits(L::and(m, L::le(a, b))), L::bits(m));
         assert_eq!(L::bits(L::or(m, L::eq(a, b))), L::bits(L::le(a, b)));
-    }
-
-    /// Point i of a seeded set, uniform in [−range, range]^D.
-    fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
-        std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
     }
 
     /// A slice through the run-time sixteen lanes, through the eight lanes

@@ -86,8 +86,8 @@
 //! it again there: the 32-bit lane multiply, a scalar fallback on SSE2,
 //! becomes `vpmulld`, and VEX encodings drop register copies. Calling that
 //! function is one of the crate's two fenced `unsafe` operations, behind the
-//! CPU check; it took the default build's 3D F1 from 7.9 to 10.8 M samples/s on random
-//! points (one thread). A unit test keeps the two copies bit for bit equal.
+//! CPU check; it took the default build's 3D F1 from 7.9 to 10.8 M
+//! samples/s on random points (one thread). A unit test keeps the two copies bit for bit equal.
 //! The other metrics' kernels stay out of the copy and run the build's own
 //! instructions: copying all twelve kernels (four metrics, three output
 //! choices) doubled the optimised build of the crate, and the Euclidean
@@ -177,10 +177,10 @@ pub fn runtime_avx512() -> bool {
 }
 
 /// `[f(0), f(1), …, f(D − 1)]` (`D ≥ 1`; per axis, or per order where a
-/// `Best` is built): `array::from_fn` as a counted loop. The kernel uses it, or plain loops, where a lane set is
-/// built per axis: in the run-time AVX-512 copy of a default build the
-/// iterator machinery behind `from_fn` stayed an out-of-line call compiled
-/// without the caller's instructions.
+/// `Best` is built): `array::from_fn` as a counted loop. The kernel uses it,
+/// or plain loops, wherever it builds lane sets per axis: in the run-time
+/// AVX-512 copy of a default build the iterator machinery behind `from_fn`
+/// stayed an out-of-line call compiled without the caller's instructions.
 #[inline(always)]
 fn per_axis<T: Copy, const D: usize>(mut f: impl FnMut(usize) -> T) -> [T; D] {
     let mut r = [f(0); D];
@@ -858,8 +858,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         active: L::M,
         best: &mut Best<L, D, N>,
     ) {
-        // A loop, not a closure: a closure stays an out-of-line call where
-        // the lanes are plain arrays (see `per_axis`).
+        // A loop, not a closure: in the run-time AVX-512 copy a closure here
+        // stayed an out-of-line call without its instructions (`per_axis`).
         let mut delta = shifted;
         for (a, d) in delta.iter_mut().enumerate() {
             let (am, cm) = p.coordinate[a];
@@ -1257,15 +1257,16 @@ impl<const N: usize> Simd<4, N> {
 /// would run without it. Every other test of the 8-lane kernel in such a
 /// build goes through whichever of the two the CPU selects; this one keeps
 /// the other bit for bit equal to it.
+/// Point i of a seeded set, uniform in [−range, range]^D, for the tests of
+/// the run-time copies (`runtime_avx2_tests`, `avx512::tests`).
+#[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx512f")))]
+fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
+    std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
+}
+
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 mod runtime_avx2_tests {
     use super::*;
-    use crate::math::uniform;
-
-    /// Point i of a seeded set, uniform in [−range, range]^D.
-    fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
-        std::array::from_fn(|a| (2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * range)
-    }
 
     fn same<const D: usize, const N: usize>(config: Config) {
         if !runtime_avx2() {
