@@ -8,8 +8,8 @@
 //! intrinsic and compiled inside a function with the x86-64-v4 features
 //! enabled, so it runs the instructions an AVX-512 build runs.
 //!
-//! Two other ways were measured first, 3D F1 on random points in the
-//! default build (`examples/throughput.rs`): plain `[f32; 16]` arrays with
+//! Another way was measured first, 3D F1 on random points in the default
+//! build (`examples/throughput.rs`): plain `[f32; 16]` arrays with
 //! lane-by-lane loops left to the compiler's vectoriser ran 3.2-5.4 M
 //! samples/s against 9.7 for the default build's eight AVX2 lanes and 24
 //! for the AVX-512 build, because the vectoriser took the loop over a
