@@ -104,9 +104,10 @@
 //! The harness that checks all of this against a brute-force oracle is the
 //! `worley-harness` crate beside this one; the `worley` command is
 //! `worley-cli`.
-// Two fenced exceptions: the call into the AVX2 copy of the 8-lane kernel
-// after the CPU check (`simd::runtime_avx2`), and the module `simd::avx512`
-// (AVX-512 intrinsics behind `simd::runtime_avx512`).
+// Two fenced exceptions: the calls into the AVX2 copies of the 8-lane
+// kernel and the coherent tiles after the CPU check (`simd::runtime_avx2`),
+// and the module `simd::avx512` (AVX-512 intrinsics behind
+// `simd::runtime_avx512`).
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
 

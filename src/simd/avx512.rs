@@ -21,10 +21,11 @@
 //! Every operation of [`Avx512`] calls an AVX-512 intrinsic, which is
 //! sound only on a CPU that has AVX-512. The type is private to this
 //! module, so the only code that can instantiate the kernel over it is
-//! [`Simd::slice_avx512`] below, and the only call of that is in
-//! [`evaluate_slice`], after [`runtime_avx512`] has seen the CPU report the
-//! features. This module and the run-time AVX2 call in `mod.rs` are the
-//! crate's only `unsafe` code.
+//! [`Simd::slice_avx512`] and [`Simd::tiles_avx512`] (the coherent path's
+//! tiles) below, and their only calls are in [`evaluate_slice`] and
+//! [`tiles`], after [`runtime_avx512`] has seen the CPU report the
+//! features. This module and the run-time AVX2 calls in `mod.rs` and
+//! `coherent.rs` are the crate's only `unsafe` code.
 //!
 //! With the sixteen lanes here the default build ran 3D F1 on random
 //! points at 25.1-25.7 M samples/s against 22.7-23.3 for the AVX-512 build
@@ -42,8 +43,9 @@ use std::arch::x86_64::{
 };
 
 use super::batch::Point;
+use super::coherent::Band;
 use super::lanes::Lanes;
-use super::{runtime_avx512, Features32, Simd, FIRST, REST};
+use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
 
 /// Sixteen lanes in one AVX-512 register each, masks in a mask register.
 /// Every operation is the IEEE operation [`One`](super::lanes::One) does,
@@ -220,6 +222,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             |at, start| self.dispatch_stage::<Avx512, REST>(at, start),
         );
     }
+
+    /// The coherent path's Euclidean tiles of a band in these lanes,
+    /// sixteen samples by sixteen rows each.
+    ///
+    /// # Safety
+    /// As [`Simd::slice_avx512`].
+    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
+    unsafe fn tiles_avx512(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
+        self.tiles_for::<Avx512, 16, _>(Euclid, o, band, out)
+    }
 }
 
 /// Runs `simd.evaluate_slice`'s work in sixteen AVX-512 lanes and returns
@@ -238,6 +250,25 @@ pub(super) fn evaluate_slice<const D: usize, const N: usize, P: Point<D>>(
     // SAFETY: `runtime_avx512` has just seen the CPU report every feature
     // `slice_avx512` enables.
     unsafe { simd.slice_avx512(xs, out) };
+    true
+}
+
+/// Runs the coherent path's Euclidean tiles of `band` in sixteen AVX-512
+/// lanes and returns true where the CPU has AVX-512; returns false, having
+/// written nothing, otherwise. The caller has checked that sixteen steps
+/// along axis 0 span at most one cell.
+pub(super) fn tiles<const D: usize, const N: usize>(
+    simd: &Simd<D, N>,
+    o: Outputs,
+    band: &Band<'_, D>,
+    out: &mut [Features32<D, N>],
+) -> bool {
+    if !runtime_avx512() {
+        return false;
+    }
+    // SAFETY: `runtime_avx512` has just seen the CPU report every feature
+    // `tiles_avx512` enables.
+    unsafe { simd.tiles_avx512(o, band, out) };
     true
 }
 

@@ -4,16 +4,21 @@
 //! hashing and generating those cells again for every sample, this path
 //! generates every cell of a band of the grid once ([`Region`]: the points as
 //! struct-of-arrays, each with its cell along axis 0, and IDs when asked
-//! for), then evaluates *tiles* of 8 × [`K`] samples (eight along axis 0 in
-//! each vector, `K` rows) against the points that can matter to the tile,
-//! each point broadcast to every lane.
+//! for), then evaluates *tiles* of samples (one vector of `L::N` along axis
+//! 0 per row, `L::N` rows) against the points that can matter to the tile,
+//! each point broadcast to every lane. Tiles are 16 × 16 samples in
+//! AVX-512 lanes (an AVX-512 build, or a default build on a CPU that has
+//! AVX-512) when sixteen steps along axis 0 span at most one cell, and
+//! 8 × 8 otherwise: the bigger tile shares its bound, its candidate search
+//! and its certificate among four times the samples, while a candidate
+//! costs a row about the same.
 //!
 //! ## Why it is cheap
 //! - A grid's row lies along axis 0, so a sample's position on the other
 //!   axes is its row's. The rank folds axis 0's term in last
 //!   ([`Metric32::rank`]), so for each candidate the rest of the rank is
-//!   computed once per row (the eight rows in the lanes of one vector) and
-//!   each vector of eight samples adds one term.
+//!   computed once per row (the tile's rows in the lanes of one vector)
+//!   and each row's vector of samples adds one term.
 //! - A row of tiles shares its rows of cells: for every point in them, the
 //!   fold of its gap terms to the tiles' box on the axes other than 0 is
 //!   computed once ([`Simd::cell_rows`]), and a tile's point test adds axis
@@ -57,19 +62,16 @@
 //! than its samples. A tile whose samples span more than two cells on some
 //! axis (rows far apart) takes the per-sample kernel.
 
-use wide::{f32x8, u32x8};
-
+#[cfg(target_feature = "avx512f")]
+use super::lanes::Sixteen;
 use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::{
-    distance_of_rank, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski, Outputs,
-    Simd, INVALID_ID, UNIT, WHOLE,
+    distance_of_rank, per_axis, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski,
+    Outputs, Simd, INVALID_ID, UNIT, WHOLE,
 };
 use crate::config::{Metric, Mode};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
 
-/// Vectors per tile: a tile is 8 samples along axis 0 times `K` rows; the
-/// rows' values are held one per lane, so `K` is the lane count.
-pub(super) const K: usize = 8;
 /// Rows of a grid per band; a band's cells are generated once.
 const BAND: usize = 64;
 /// Relative slack of the candidate and certificate tests.
@@ -85,7 +87,8 @@ pub(super) struct Region<const D: usize> {
     side: [usize; D],
     start: Vec<u32>,
     /// Fixed-point coordinates (the 24-bit integers, exact in f32), padded
-    /// by eight so that a group of eight read from any cell stays in bounds.
+    /// by [`WIDEST`] so that a group of lanes read from any cell stays in
+    /// bounds.
     q: [Vec<f32>; D],
     /// Each point's cell along axis 0, from the region's first (exact:
     /// fewer than 2^24 cells), padded like `q`.
@@ -134,7 +137,7 @@ impl<const D: usize> Region<D> {
         }
         start.push(x_cell.len() as u32);
         for v in q.iter_mut().chain([&mut x_cell]) {
-            v.resize(v.len() + 8, 0.0);
+            v.resize(v.len() + WIDEST, 0.0);
         }
         Region { origin: lo, side, start, q, x_cell, id }
     }
@@ -150,19 +153,20 @@ impl<const D: usize> Region<D> {
     }
 }
 
-/// One tile of samples, 8 × [`K`] lanes, in the frame of its `reference`
-/// cell (the smallest cell of its lanes on every axis). Every row of a grid
-/// lies along axis 0, so axis 0 varies with the lane and the other axes
-/// only with the row: those are held with row k in lane k.
-struct Tile<const D: usize> {
+/// One tile of samples, `L::N` along axis 0 times `L::N` rows, in the
+/// frame of its `reference` cell (the smallest cell of its lanes on every
+/// axis). Every row of a grid lies along axis 0, so axis 0 varies with the
+/// lane and the other axes only with the row: those are held with row k in
+/// lane k.
+struct Tile<L: Lanes, const D: usize> {
     /// Axis 0 per lane: the fraction in the lane's own cell (lane units),
     /// and that cell minus the reference, times [`UNIT`] (exact).
-    x_f: f32x8,
-    x_cl: f32x8,
+    x_f: L::F,
+    x_cl: L::F,
     /// The other axes per row, the same two quantities (lane k is row k;
     /// index 0 is unused).
-    row_f: [f32x8; D],
-    row_cl: [f32x8; D],
+    row_f: [L::F; D],
+    row_cl: [L::F; D],
     reference: [i64; D],
     /// The lanes' cells: largest per axis (the smallest is the reference).
     hi: [i64; D],
@@ -183,7 +187,7 @@ struct AxisCell {
 }
 
 /// A row of cells along axis 0 searched by a row of tiles.
-struct CellRow<const D: usize> {
+struct CellRow<L: Lanes, const D: usize> {
     /// The region's index of the row's first cell.
     base: usize,
     /// The metric's terms of its gaps to the tiles' box on axes 1..,
@@ -193,7 +197,7 @@ struct CellRow<const D: usize> {
     own: bool,
     /// Each row of samples' position minus the corner on axes 1.. (lane k
     /// is row k; 0 unused).
-    shift: [f32x8; D],
+    shift: [L::F; D],
 }
 
 /// The gap on one axis between the cell whose lower corner is at `frame`
@@ -205,8 +209,8 @@ fn cell_gap(frame: f32, lo: f32, hi: f32) -> f32 {
 
 /// The gap on one axis between points at `p` and the box `lo ..= hi`.
 #[inline(always)]
-fn point_gap(p: f32x8, lo: f32x8, hi: f32x8) -> f32x8 {
-    Eight::max(Eight::max(lo - p, p - hi), f32x8::ZERO)
+fn point_gap<L: Lanes>(p: L::F, lo: L::F, hi: L::F) -> L::F {
+    L::max(L::max(L::sub(lo, p), L::sub(p, hi)), L::f(0.0))
 }
 
 /// A distance (lane units) grown by the slack.
@@ -217,7 +221,7 @@ fn inflate(d: f32) -> f32 {
 
 /// A band of grid rows and its cells' points: what every tile of the band
 /// reads.
-struct Band<'a, const D: usize> {
+pub(super) struct Band<'a, const D: usize> {
     grid: &'a Grid<D>,
     axes: &'a Axes<D>,
     /// The band's first row.
@@ -230,6 +234,9 @@ struct Band<'a, const D: usize> {
 struct Axes<const D: usize> {
     cell: [Vec<i64>; D],
     f: [Vec<f32>; D],
+    /// Whether sixteen steps along axis 0 span at most one cell, so that
+    /// tiles sixteen samples wide stay within two cells.
+    sixteen: bool,
 }
 
 impl<const D: usize, const N: usize> Simd<D, N> {
@@ -280,7 +287,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if hi.saturating_sub(lo) >= 1 << 23 {
             return None;
         }
-        Some(Axes { cell, f })
+        Some(Axes { cell, f, sixteen: 2.0 * tile_width <= 1.0 })
     }
 
     /// [`Simd::evaluate_grid`] by bands of [`BAND`] rows on the coherent
@@ -350,11 +357,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
     }
 
-    /// The Euclidean tile loops, recompiled for AVX2 when this build lacks
-    /// it and the CPU has it, as [`Simd::dispatch8`] does for the
-    /// per-sample kernel: the same operations, so the same bits.
+    /// The Euclidean tile loops in the widest lanes the CPU runs: sixteen
+    /// where the build has AVX-512, or where the CPU has it at run time
+    /// ([`avx512`](super::avx512)), when sixteen steps along axis 0 span at
+    /// most one cell; otherwise eight, recompiled for AVX2 when this build
+    /// lacks it and the CPU has it, as [`Simd::dispatch8`] does for the
+    /// per-sample kernel. Every lane runs the same operations, so the bits
+    /// are the same whichever is taken.
     #[inline(always)]
     fn tiles_euclid(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
+        #[cfg(target_feature = "avx512f")]
+        if band.axes.sixteen {
+            return self.tiles_for::<Sixteen, 16, _>(Euclid, o, band, out);
+        }
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
+        if band.axes.sixteen && super::avx512::tiles(self, o, band, out) {
+            return;
+        }
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
         if super::runtime_avx2() {
             // SAFETY: `tiles_avx2` requires AVX2 and nothing else, and
@@ -362,48 +381,56 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             #[allow(unsafe_code)]
             return unsafe { self.tiles_avx2(o, band, out) };
         }
-        self.tiles_for(Euclid, o, band, out)
+        self.tiles_for::<Eight, 8, _>(Euclid, o, band, out)
     }
 
-    /// [`Simd::tiles_euclid`]'s loops compiled with AVX2 enabled.
+    /// [`Simd::tiles_euclid`]'s eight-lane loops compiled with AVX2 enabled.
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[target_feature(enable = "avx2")]
     fn tiles_avx2(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
-        self.tiles_for(Euclid, o, band, out)
+        self.tiles_for::<Eight, 8, _>(Euclid, o, band, out)
     }
 
-    /// The tile loop for the outputs asked for.
+    /// The tile loop in lanes `L` (`K` = `L::N`) for the outputs asked for.
     #[inline(always)]
-    fn tiles_for<M: Metric32>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
+    pub(super) fn tiles_for<L: Lanes, const K: usize, M: Metric32>(
+        &self,
+        m: M,
+        o: Outputs,
+        band: &Band<'_, D>,
+        out: &mut [Features32<D, N>],
+    ) {
         match o {
-            Outputs::Distances => self.tiles::<M, false, false>(m, band, out),
-            Outputs::Ids => self.tiles::<M, true, false>(m, band, out),
-            Outputs::IdsAndDeltas => self.tiles::<M, true, true>(m, band, out),
+            Outputs::Distances => self.tiles::<L, K, M, false, false>(m, band, out),
+            Outputs::Ids => self.tiles::<L, K, M, true, false>(m, band, out),
+            Outputs::IdsAndDeltas => self.tiles::<L, K, M, true, true>(m, band, out),
         }
     }
 
-    /// The other metrics' tile loops, out of line (as `search_outputs`).
+    /// The other metrics' tile loops, eight lanes, out of line (as
+    /// `search_outputs`).
     #[inline(never)]
     fn tiles_outputs<M: Metric32>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
-        self.tiles_for(m, o, band, out)
+        self.tiles_for::<Eight, 8, M>(m, o, band, out)
     }
 
-    /// Every tile of a band.
+    /// Every tile of a band, `K` = `L::N` samples along axis 0 by `K` rows.
     #[inline(always)]
-    fn tiles<M: Metric32, const IDS: bool, const DELTAS: bool>(
+    fn tiles<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         band: &Band<'_, D>,
         out: &mut [Features32<D, N>],
     ) {
+        debug_assert_eq!(K, L::N);
         let Band { grid, axes, first, ref region } = *band;
         let width = grid.size[0];
         let rows = out.len() / width;
         // Axis 0 as lanes: each sample's cell relative to the band's first
         // cell, times UNIT (exact), and its fraction; padded with the last
-        // sample so that eight lanes can be read from any x.
+        // sample so that a vector can be read from any x.
         let base = region.origin[0];
-        let pad = |v: &mut Vec<f32>| v.resize(width + 8, v[width - 1]);
+        let pad = |v: &mut Vec<f32>| v.resize(width + WIDEST, v[width - 1]);
         let mut x_cell: Vec<f32> = axes.cell[0].iter().map(|&c| (c - base) as f32 * UNIT).collect();
         let mut x_f = axes.f[0].clone();
         pad(&mut x_cell);
@@ -442,27 +469,35 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             }
             // Axes 1.. per row, row k in lane k: fraction, and cell minus the
             // reference times UNIT (axis 0's entries are zero, unused).
-            let row_f = std::array::from_fn(|a| f32x8::new(std::array::from_fn(|k| rk[k].1[a])));
-            let row_cl =
-                std::array::from_fn(|a| f32x8::new(std::array::from_fn(|k| (rk[k].0[a] - reference[a]) as f32 * UNIT)));
-            let mut tile = Tile { x_f: f32x8::ZERO, x_cl: f32x8::ZERO, row_f, row_cl, reference, hi, blo, bhi };
+            let (mut row_f, mut row_cl) = ([[0f32; WIDEST]; D], [[0f32; WIDEST]; D]);
+            for (k, (c, f)) in rk.iter().enumerate() {
+                for a in 1..D {
+                    row_f[a][k] = f[a];
+                    row_cl[a][k] = (c[a] - reference[a]) as f32 * UNIT;
+                }
+            }
+            let mut tile = Tile::<L, D> {
+                x_f: L::f(0.0),
+                x_cl: L::f(0.0),
+                row_f: per_axis(|a| lanes_from::<L>(&row_f[a])),
+                row_cl: per_axis(|a| lanes_from::<L>(&row_cl[a])),
+                reference,
+                hi,
+                blo,
+                bhi,
+            };
             if !far_apart {
                 self.cell_rows(metric, region, &tile, &mut cell_rows, &mut near);
             }
-            let mut best: [Best<Eight, D, N>; K] = std::array::from_fn(|_| Best::empty());
-            for x0 in (0..width).step_by(8) {
-                let cols_here = (width - x0).min(8);
+            let mut best: [Best<L, D, N>; K] = per_axis(|_| Best::empty());
+            for x0 in (0..width).step_by(K) {
+                let cols_here = (width - x0).min(K);
                 let (first_x, last_x) = (x0, x0 + cols_here - 1);
                 let (c0, c1) = (axes.cell[0][first_x], axes.cell[0][last_x]);
                 tile.reference[0] = c0.min(c1);
                 tile.hi[0] = c0.max(c1);
                 if far_apart || tile.hi[0] - tile.reference[0] > 1 {
-                    for k in 0..rows_here {
-                        let o = (r0 + k) * width + x0;
-                        let start = (first + r0 + k) * width + x0;
-                        let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + i.min(cols_here - 1)));
-                        self.write8(&block, &mut out[o..o + cols_here]);
-                    }
+                    self.tile_apart(grid, first + r0, rows_here, x0, cols_here, &mut out[r0 * width..]);
                     continue;
                 }
                 // Cells along axis 0 are monotone in x: the box's ends are
@@ -471,14 +506,41 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 let (p0, p1) = (x_cell[first_x] - shift + x_f[first_x], x_cell[last_x] - shift + x_f[last_x]);
                 tile.blo[0] = p0.min(p1);
                 tile.bhi[0] = p0.max(p1);
-                tile.x_f = load(&x_f, x0);
-                tile.x_cl = load(&x_cell, x0) - f32x8::splat(shift);
-                self.tile::<M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, &mut best);
+                tile.x_f = load::<L>(&x_f, x0);
+                tile.x_cl = L::sub(load::<L>(&x_cell, x0), L::f(shift));
+                self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, &mut best);
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
-                    self.finish::<Eight, DELTAS>(b);
+                    self.finish::<L, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
-                    write_lanes::<Eight, D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
+                    write_lanes::<L, D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
+            }
+        }
+    }
+
+    /// A tile whose samples span more than two cells on some axis, by the
+    /// per-sample kernel, eight samples at a time: `rows` rows from grid row
+    /// `row`, columns `x0..x0 + cols`, into `out` (whose first element is
+    /// the first row's column 0).
+    #[cold]
+    #[inline(never)]
+    fn tile_apart(
+        &self,
+        grid: &Grid<D>,
+        row: usize,
+        rows: usize,
+        x0: usize,
+        cols: usize,
+        out: &mut [Features32<D, N>],
+    ) {
+        let width = grid.size[0];
+        for k in 0..rows {
+            for c in (x0..x0 + cols).step_by(8) {
+                let n = (x0 + cols - c).min(8);
+                let start = (row + k) * width + c;
+                let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + i.min(n - 1)));
+                let o = k * width + c;
+                self.write8(&block, &mut out[o..o + n]);
             }
         }
     }
@@ -487,50 +549,50 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// own cells and one more on every side, on every axis but 0), and for
     /// every point in them, the fold of its gap terms to the tiles' box on
     /// those axes, into `near` at the point's index.
-    fn cell_rows<M: Metric32>(
+    #[inline(always)]
+    fn cell_rows<L: Lanes, M: Metric32>(
         &self,
         metric: M,
         region: &Region<D>,
-        t: &Tile<D>,
-        rows: &mut Vec<CellRow<D>>,
+        t: &Tile<L, D>,
+        rows: &mut Vec<CellRow<L, D>>,
         near: &mut [f32],
     ) {
         rows.clear();
         let lo: [i64; D] = std::array::from_fn(|a| if a == 0 { region.origin[0] } else { t.reference[a] - 1 });
         let hi: [i64; D] = std::array::from_fn(|a| if a == 0 { region.origin[0] } else { t.hi[a] + 1 });
-        let (blo, bhi): ([f32x8; D], [f32x8; D]) =
-            (std::array::from_fn(|a| f32x8::splat(t.blo[a])), std::array::from_fn(|a| f32x8::splat(t.bhi[a])));
-        for_cells(lo, hi, |c| {
+        let (blo, bhi): ([L::F; D], [L::F; D]) = (per_axis(|a| L::f(t.blo[a])), per_axis(|a| L::f(t.bhi[a])));
+        let mut c = lo;
+        loop {
             let frame: [f32; D] =
                 std::array::from_fn(|a| if a == 0 { 0.0 } else { (c[a] - t.reference[a]) as f32 * UNIT });
             let terms: [f32; D] = std::array::from_fn(|a| metric.term::<One>(cell_gap(frame[a], t.blo[a], t.bhi[a])));
+            let mut shift = [L::f(0.0); D];
+            for a in 1..D {
+                shift[a] = L::sub(t.row_f[a], L::sub(L::f(frame[a]), t.row_cl[a]));
+            }
             let row = CellRow {
                 base: region.cell(c),
                 // Folded as in `Metric32::rank`: axes 1, 2, …, then 0.
                 rest: terms[1..].iter().copied().reduce(|r, v| metric.fold::<One>(r, v)).unwrap_or(0.0),
                 own: (1..D).all(|a| c[a] != lo[a] && c[a] != hi[a]),
-                shift: std::array::from_fn(|a| {
-                    if a == 0 {
-                        f32x8::ZERO
-                    } else {
-                        t.row_f[a] - (f32x8::splat(frame[a]) - t.row_cl[a])
-                    }
-                }),
+                shift,
             };
             let (s, e) = (region.start[row.base] as usize, region.start[row.base + region.side[0]] as usize);
-            for g in (s..e).step_by(8) {
-                let gap: [f32x8; D] = std::array::from_fn(|a| {
-                    if a == 0 {
-                        return f32x8::ZERO;
-                    }
-                    point_gap(f32x8::splat(frame[a]) + load(&region.q[a], g), blo[a], bhi[a])
-                });
-                let rest = if D > 1 { metric.rest::<Eight, D>(&gap) } else { f32x8::ZERO };
-                let n = (e - g).min(8);
-                near[g..g + n].copy_from_slice(&rest.to_array()[..n]);
+            for g in (s..e).step_by(L::N) {
+                let mut gap = [L::f(0.0); D];
+                for a in 1..D {
+                    gap[a] = point_gap::<L>(L::add(L::f(frame[a]), load::<L>(&region.q[a], g)), blo[a], bhi[a]);
+                }
+                let rest = if D > 1 { metric.rest::<L, D>(&gap) } else { L::f(0.0) };
+                let n = (e - g).min(L::N);
+                near[g..g + n].copy_from_slice(&lanes_of::<L>(rest)[..n]);
             }
             rows.push(row);
-        });
+            if !next_cell(&mut c, lo, hi) {
+                break;
+            }
+        }
     }
 
     /// One tile: the points of its own cells, the bound they give, the
@@ -538,19 +600,19 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// lanes left uncertified. Ranks in lane units. `rows` and `near` are
     /// the tile row's, from [`Simd::cell_rows`].
     #[inline(always)]
-    fn tile<M: Metric32, const IDS: bool, const DELTAS: bool>(
+    fn tile<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         region: &Region<D>,
-        t: &Tile<D>,
-        rows: &[CellRow<D>],
+        t: &Tile<L, D>,
+        rows: &[CellRow<L, D>],
         near: &[f32],
-        best: &mut [Best<Eight, D, N>; K],
+        best: &mut [Best<L, D, N>; K],
     ) {
         for b in best.iter_mut() {
             b.reset::<IDS, DELTAS>();
         }
-        let (blo, bhi) = (f32x8::splat(t.blo[0]), f32x8::splat(t.bhi[0]));
+        let (blo, bhi) = (L::f(t.blo[0]), L::f(t.bhi[0]));
         // The searched cells (the tile's own and one more on each side).
         let lo: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
         let hi: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
@@ -570,38 +632,38 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // Each lane's position on axis 0 minus the corner of the cell
         // `cell` cells from the region's first (exact small integers).
         let reference = (t.reference[0] - region.origin[0]) as f32;
-        let shift = |cell: f32| t.x_f - (f32x8::splat((cell - reference) * UNIT) - t.x_cl);
+        let shift = |cell: f32| L::sub(t.x_f, L::sub(L::f((cell - reference) * UNIT), t.x_cl));
 
         // The tile's own cells: every point is a candidate.
         for row in rows.iter().filter(|r| r.own) {
             for xc in x_cells.iter().filter(|xc| xc.own) {
                 let (i, x_shift) = (row.base + xc.index, shift(xc.index as f32));
                 for p in region.start[i] as usize..region.start[i + 1] as usize {
-                    self.candidate::<M, IDS, DELTAS>(metric, region, p, x_shift, &row.shift, best);
+                    self.candidate::<L, K, M, IDS, DELTAS>(metric, region, p, x_shift, &row.shift, best);
                 }
             }
         }
 
         // The bound: the largest F_n of any lane so far (of the cells
         // around when the own cells hold fewer than n points).
-        let bound = best.iter().fold(f32x8::ZERO, |m, b| Eight::max(m, b.rank[N - 1]));
-        let mut bound = bound.to_array().into_iter().fold(0.0, f32::max);
+        let bound = best.iter().fold(L::f(0.0), |m, b| L::max(m, b.rank[N - 1]));
+        let mut bound = lanes_of::<L>(bound)[..L::N].iter().fold(0.0, |m: f32, &v| m.max(v));
         if bound == f32::INFINITY {
             bound = self.bound(metric, region, t, lo, hi);
             if bound == f32::INFINITY {
-                return self.tile_per_sample::<M, IDS, DELTAS>(metric, t, best, [0; K]);
+                return self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, [0; K]);
             }
         }
         let once = inflate(distance_of_rank::<One>(self.config.metric, bound));
         let certify = metric.rank_of_distance::<One>(once);
         let prune = metric.rank_of_distance::<One>(inflate(once));
-        let prune8 = f32x8::splat(prune);
+        let prune_lanes = L::f(prune);
 
         // The other cells: a cell farther than the pruning bound from the
         // tile's box is skipped, and so is a point. The cells of a row that
         // remain are consecutive in the region, so their points are read as
         // one run; each point's cell along axis 0 comes with it.
-        let (own_lo, own_hi) = (f32x8::ZERO, f32x8::splat((t.hi[0] - t.reference[0]) as f32));
+        let (own_lo, own_hi) = (L::f(0.0), L::f((t.hi[0] - t.reference[0]) as f32));
         for row in rows.iter().filter(|r| r.rest <= prune) {
             let first = usize::from(metric.fold::<One>(row.rest, x_cells[0].term) > prune);
             let last = count - 1 - usize::from(metric.fold::<One>(row.rest, x_cells[count - 1].term) > prune);
@@ -611,90 +673,108 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             );
             let mut g = s;
             while g < e {
-                let cell = load(&region.x_cell, g) - f32x8::splat(reference);
-                let p = cell * f32x8::splat(UNIT) + load(&region.q[0], g);
-                let rank = metric.fold::<Eight>(load(near, g), metric.term::<Eight>(point_gap(p, blo, bhi)));
-                let mut keep = Eight::le(rank, prune8);
+                let cell = L::sub(load::<L>(&region.x_cell, g), L::f(reference));
+                let p = L::add(L::mul(cell, L::f(UNIT)), load::<L>(&region.q[0], g));
+                let rank = metric.fold::<L>(load::<L>(near, g), metric.term::<L>(point_gap::<L>(p, blo, bhi)));
+                let mut keep = L::le(rank, prune_lanes);
                 if row.own {
                     // The own cells' points are in already.
-                    keep = Eight::and(keep, Eight::or(Eight::lt(cell, own_lo), Eight::lt(own_hi, cell)));
+                    keep = L::and(keep, L::or(L::lt(cell, own_lo), L::lt(own_hi, cell)));
                 }
-                let mut bits = keep.to_bitmask() & ((1u32 << (e - g).min(8)) - 1);
+                let n = (e - g).min(L::N);
+                let mut bits = L::bits(keep) & (u32::MAX >> (32 - n));
                 while bits != 0 {
                     let p = g + bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    self.candidate::<M, IDS, DELTAS>(metric, region, p, shift(region.x_cell[p]), &row.shift, best);
+                    self.candidate::<L, K, M, IDS, DELTAS>(
+                        metric,
+                        region,
+                        p,
+                        shift(region.x_cell[p]),
+                        &row.shift,
+                        best,
+                    );
                 }
-                g += 8;
+                g += L::N;
             }
         }
 
         // The certificate, per lane: the distance to the outside of the
         // searched cells is a minimum over axes, so axis 0's part per lane
         // and the others' per row.
-        let outside = |f: f32x8, cl: f32x8, a: usize| {
-            let p = cl + f;
+        let outside = |f: L::F, cl: L::F, a: usize| {
+            let p = L::add(cl, f);
             let (low, high) = ((lo[a] - t.reference[a]) as f32 * UNIT, (hi[a] + 1 - t.reference[a]) as f32 * UNIT);
-            Eight::min(p - f32x8::splat(low), f32x8::splat(high) - p)
+            L::min(L::sub(p, L::f(low)), L::sub(L::f(high), p))
         };
         let x_edge = outside(t.x_f, t.x_cl, 0);
-        let mut row_edge = f32x8::splat(f32::INFINITY);
+        let mut row_edge = L::f(f32::INFINITY);
         for a in 1..D {
-            row_edge = Eight::min(row_edge, outside(t.row_f[a], t.row_cl[a], a));
+            row_edge = L::min(row_edge, outside(t.row_f[a], t.row_cl[a], a));
         }
-        let row_edge = row_edge.to_array();
-        let certify8 = f32x8::splat(certify);
+        let row_edge = lanes_of::<L>(row_edge);
+        let certify_lanes = L::f(certify);
+        let all = u32::MAX >> (32 - L::N);
         let mut certified = [0u32; K];
         for k in 0..K {
-            let edge = Eight::min(x_edge, f32x8::splat(row_edge[k]));
-            let edge = Eight::max(edge * f32x8::splat(1.0 - SLACK_REL) - f32x8::splat(SLACK_ABS), f32x8::ZERO);
+            let edge = L::min(x_edge, L::f(row_edge[k]));
+            let edge = L::max(L::sub(L::mul(edge, L::f(1.0 - SLACK_REL)), L::f(SLACK_ABS)), L::f(0.0));
             let last = best[k].rank[N - 1];
-            let ok = Eight::and(Eight::le(last, certify8), Eight::lt(last, metric.rank_of_distance::<Eight>(edge)));
-            certified[k] = ok.to_bitmask();
+            let ok = L::and(L::le(last, certify_lanes), L::lt(last, metric.rank_of_distance::<L>(edge)));
+            certified[k] = L::bits(ok);
         }
-        if certified.iter().all(|&m| m == 0xFF) {
+        if certified.iter().all(|&m| m == all) {
             return;
         }
-        self.tile_per_sample::<M, IDS, DELTAS>(metric, t, best, certified)
+        self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
     }
 
     /// The n-th smallest farthest distance (as a rank) from the tile's box
     /// to the points of the cells `lo ..= hi`; +∞ if they hold fewer.
     #[inline(always)]
-    fn bound<M: Metric32>(&self, metric: M, region: &Region<D>, t: &Tile<D>, lo: [i64; D], hi: [i64; D]) -> f32 {
-        let (blo, bhi): ([f32x8; D], [f32x8; D]) =
-            (std::array::from_fn(|a| f32x8::splat(t.blo[a])), std::array::from_fn(|a| f32x8::splat(t.bhi[a])));
+    fn bound<L: Lanes, M: Metric32>(
+        &self,
+        metric: M,
+        region: &Region<D>,
+        t: &Tile<L, D>,
+        lo: [i64; D],
+        hi: [i64; D],
+    ) -> f32 {
+        let (blo, bhi): ([L::F; D], [L::F; D]) = (per_axis(|a| L::f(t.blo[a])), per_axis(|a| L::f(t.bhi[a])));
+        let index: [f32; WIDEST] = std::array::from_fn(|j| j as f32);
+        let index = lanes_from::<L>(&index);
         // The n smallest per lane, sorted, by a min/max network.
-        let mut least = [f32x8::splat(f32::INFINITY); N];
-        for_cells(lo, hi, |c| {
+        let mut least = [L::f(f32::INFINITY); N];
+        let mut c = lo;
+        loop {
             let i = region.cell(c);
             let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
-            for g in (s..e).step_by(8) {
-                let far: [f32x8; D] = std::array::from_fn(|a| {
-                    let p = f32x8::splat((c[a] - t.reference[a]) as f32 * UNIT) + load(&region.q[a], g);
-                    Eight::max(p - blo[a], bhi[a] - p)
+            for g in (s..e).step_by(L::N) {
+                let far: [L::F; D] = per_axis(|a| {
+                    let p = L::add(L::f((c[a] - t.reference[a]) as f32 * UNIT), load::<L>(&region.q[a], g));
+                    L::max(L::sub(p, blo[a]), L::sub(bhi[a], p))
                 });
-                let mut v = metric.rank::<Eight, D>(&far);
-                if e - g < 8 {
-                    v = f32x8::new(std::array::from_fn(|j| if j < e - g { 0.0 } else { 1.0 }))
-                        .simd_lt(f32x8::splat(0.5))
-                        .select(v, f32x8::splat(f32::INFINITY));
-                }
+                // Lanes past the cell's last point count as +∞.
+                let mut v = metric.rank::<L, D>(&far);
+                v = L::select(L::lt(index, L::f((e - g) as f32)), v, L::f(f32::INFINITY));
                 for l in least.iter_mut() {
-                    let (a, b) = (Eight::min(*l, v), Eight::max(*l, v));
+                    let (a, b) = (L::min(*l, v), L::max(*l, v));
                     *l = a;
                     v = b;
                 }
             }
-        });
+            if !next_cell(&mut c, lo, hi) {
+                break;
+            }
+        }
         if N == 1 {
-            return least[0].to_array().into_iter().fold(f32::INFINITY, f32::min);
+            return lanes_of::<L>(least[0])[..L::N].iter().fold(f32::INFINITY, |m, &v| m.min(v));
         }
-        let mut all = [f32::INFINITY; 128];
+        let mut all = [f32::INFINITY; 16 * WIDEST];
         for (k, l) in least.iter().enumerate() {
-            all[8 * k..8 * k + 8].copy_from_slice(&l.to_array());
+            all[L::N * k..L::N * (k + 1)].copy_from_slice(&lanes_of::<L>(*l)[..L::N]);
         }
-        let all = &mut all[..8 * N];
+        let all = &mut all[..L::N * N];
         all.sort_unstable_by(f32::total_cmp);
         all[N - 1]
     }
@@ -705,35 +785,34 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// `shift − q` on every axis, so a row shares the rest of the rank
     /// ([`Metric32::rest`]) and only axis 0's term is per lane.
     #[inline(always)]
-    fn candidate<M: Metric32, const IDS: bool, const DELTAS: bool>(
+    fn candidate<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         region: &Region<D>,
         p: usize,
-        x_shift: f32x8,
-        row_shift: &[f32x8; D],
-        best: &mut [Best<Eight, D, N>; K],
+        x_shift: L::F,
+        row_shift: &[L::F; D],
+        best: &mut [Best<L, D, N>; K],
     ) {
-        let dx = x_shift - f32x8::splat(region.q[0][p]);
-        let id = if IDS { u32x8::splat(region.id[p]) } else { u32x8::ZERO };
-        let d_row: [f32x8; D] =
-            std::array::from_fn(|a| if a == 0 { f32x8::ZERO } else { row_shift[a] - f32x8::splat(region.q[a][p]) });
-        let d_row_lanes: [[f32; K]; D] = if DELTAS || !M::SPLITS { d_row.map(|v| v.to_array()) } else { [[0.0; K]; D] };
-        let delta = |k: usize| -> [f32x8; D] {
-            std::array::from_fn(|a| if a == 0 { dx } else { f32x8::splat(d_row_lanes[a][k]) })
-        };
+        let dx = L::sub(x_shift, L::f(region.q[0][p]));
+        let id = if IDS { L::u(region.id[p]) } else { L::u(0) };
+        let d_row: [L::F; D] =
+            per_axis(|a| if a == 0 { L::f(0.0) } else { L::sub(row_shift[a], L::f(region.q[a][p])) });
+        let d_row_lanes: [[f32; WIDEST]; D] =
+            if DELTAS || !M::SPLITS { per_axis(|a| lanes_of::<L>(d_row[a])) } else { [[0.0; WIDEST]; D] };
+        let delta = |k: usize| -> [L::F; D] { per_axis(|a| if a == 0 { dx } else { L::f(d_row_lanes[a][k]) }) };
         if M::SPLITS && D > 1 {
-            let first = metric.term::<Eight>(dx);
-            let rest = metric.rest::<Eight, D>(&d_row).to_array();
+            let first = metric.term::<L>(dx);
+            let rest = lanes_of::<L>(metric.rest::<L, D>(&d_row));
             for (k, b) in best.iter_mut().enumerate() {
-                let rank = metric.fold::<Eight>(f32x8::splat(rest[k]), first);
-                let delta = if DELTAS { delta(k) } else { [f32x8::ZERO; D] };
+                let rank = metric.fold::<L>(L::f(rest[k]), first);
+                let delta = if DELTAS { delta(k) } else { [L::f(0.0); D] };
                 b.insert::<IDS, DELTAS>(rank, delta, id);
             }
         } else {
             for (k, b) in best.iter_mut().enumerate() {
                 let delta = delta(k);
-                b.insert::<IDS, DELTAS>(metric.rank::<Eight, D>(&delta), delta, id);
+                b.insert::<IDS, DELTAS>(metric.rank::<L, D>(&delta), delta, id);
             }
         }
     }
@@ -741,21 +820,24 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// The lanes of a tile not set in `certified`, by the per-sample kernel.
     #[cold]
     #[inline(never)]
-    fn tile_per_sample<M: Metric32, const IDS: bool, const DELTAS: bool>(
+    fn tile_per_sample<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
-        t: &Tile<D>,
-        best: &mut [Best<Eight, D, N>; K],
+        t: &Tile<L, D>,
+        best: &mut [Best<L, D, N>; K],
         certified: [u32; K],
     ) {
-        let (x_f, x_cl) = (t.x_f.to_array(), t.x_cl.to_array());
-        let row_f: [[f32; 8]; D] = t.row_f.map(|v| v.to_array());
-        let row_cl: [[f32; 8]; D] = t.row_cl.map(|v| v.to_array());
+        let (x_f, x_cl) = (lanes_of::<L>(t.x_f), lanes_of::<L>(t.x_cl));
+        let row_f: [[f32; WIDEST]; D] = per_axis(|a| lanes_of::<L>(t.row_f[a]));
+        let row_cl: [[f32; WIDEST]; D] = per_axis(|a| lanes_of::<L>(t.row_cl[a]));
         for (k, b) in best.iter_mut().enumerate() {
-            let mut rank = b.rank.map(|v| v.to_array());
-            let mut id = b.id.map(|v| v.to_array());
-            let mut delta = b.delta.map(|d| d.map(|v| v.to_array()));
-            for i in (0..8).filter(|i| certified[k] & (1 << i) == 0) {
+            let mut rank: [[f32; WIDEST]; N] = per_axis(|j| lanes_of::<L>(b.rank[j]));
+            let mut id = [[0u32; WIDEST]; N];
+            for (j, lanes) in id.iter_mut().enumerate() {
+                L::u_store(b.id[j], &mut lanes[..L::N]);
+            }
+            let mut delta: [[[f32; WIDEST]; D]; N] = per_axis(|j| per_axis(|a| lanes_of::<L>(b.delta[j][a])));
+            for i in (0..L::N).filter(|i| certified[k] & (1 << i) == 0) {
                 let (f, cl) = (
                     |a: usize| if a == 0 { x_f[i] } else { row_f[a][k] },
                     |a: usize| {
@@ -779,39 +861,46 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     }
                 }
             }
-            b.rank = rank.map(f32x8::new);
-            b.id = id.map(u32x8::new);
-            b.delta = delta.map(|d| d.map(f32x8::new));
+            b.rank = per_axis(|j| lanes_from::<L>(&rank[j]));
+            b.id = per_axis(|j| L::u_load(&id[j][..L::N]));
+            b.delta = per_axis(|j| per_axis(|a| lanes_from::<L>(&delta[j][a])));
         }
     }
 }
 
-/// Eight values from `v[at..]` (the region's padding keeps it in bounds).
+/// `L::N` values from `v[at..]` (the region's padding keeps it in bounds).
 #[inline(always)]
-fn load(v: &[f32], at: usize) -> f32x8 {
-    let s: &[f32; 8] = v[at..at + 8].try_into().expect("padded");
-    f32x8::new(*s)
+fn load<L: Lanes>(v: &[f32], at: usize) -> L::F {
+    L::f_load(&v[at..at + L::N])
 }
 
-/// Calls `visit` for every cell of the box `lo ..= hi`.
+/// Lanes into an array, of which the first `L::N` are set.
 #[inline(always)]
-fn for_cells<const D: usize>(lo: [i64; D], hi: [i64; D], mut visit: impl FnMut([i64; D])) {
-    let mut c = lo;
-    loop {
-        visit(c);
-        let mut a = 0;
-        loop {
-            if a == D {
-                return;
-            }
-            c[a] += 1;
-            if c[a] <= hi[a] {
-                break;
-            }
-            c[a] = lo[a];
-            a += 1;
+fn lanes_of<L: Lanes>(v: L::F) -> [f32; WIDEST] {
+    let mut a = [0.0; WIDEST];
+    L::f_store(v, &mut a[..L::N]);
+    a
+}
+
+/// Lanes from the first `L::N` of an array.
+#[inline(always)]
+fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
+    L::f_load(&a[..L::N])
+}
+
+/// Steps `c` to the next cell of the box `lo ..= hi` (axis 0 fastest);
+/// false when `c` was the last. A loop over it, rather than a closure
+/// called per cell, keeps the body inline in the run-time AVX-512 copy.
+#[inline(always)]
+fn next_cell<const D: usize>(c: &mut [i64; D], lo: [i64; D], hi: [i64; D]) -> bool {
+    for a in 0..D {
+        c[a] += 1;
+        if c[a] <= hi[a] {
+            return true;
         }
+        c[a] = lo[a];
     }
+    false
 }
 
 fn min_max(v: &[i64]) -> (i64, i64) {

@@ -94,7 +94,9 @@
 //! metric is the one the speed figures are about.
 //!
 //! Where the CPU also has AVX-512, a build without it runs Euclidean slices
-//! ([`Simd::evaluate_slice`]) in sixteen AVX-512 lanes chosen at run time
+//! ([`Simd::evaluate_slice`]) and the coherent path's tiles of grids
+//! ([`Simd::evaluate_grid`], 16 × 16 samples where sixteen steps along
+//! axis 0 span at most one cell) in sixteen AVX-512 lanes chosen at run time
 //! ([`runtime_avx512`]): the one kernel instantiated over a private lane set
 //! of AVX-512 intrinsics, compiled inside a function with the x86-64-v4
 //! features. Recompiling `wide`'s code cannot get there (its sixteen lanes
