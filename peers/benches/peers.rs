@@ -17,7 +17,9 @@
 //! - noise (noise-rs) `Worley`: f64, one point per cell from a fixed table.
 //!
 //! After criterion's groups, one round-robin run of every contestant in
-//! this process prints the headline table: median M samples/s of 9 rounds,
+//! this process prints the headline table: median M samples/s of 15 rounds
+//! after 3 unmeasured ones (a single call takes a millisecond or less, so
+//! the first rounds mostly measure a cold cache and a waking core),
 //! with the ratios of ours to the peers, and the build flags.
 //!
 //! Peers get frequency 0.55 (cell side ≈ 1.8 units, the same feature
@@ -189,7 +191,8 @@ struct Entry<'a> {
     rates: Vec<f64>,
 }
 
-/// Round-robin: every entry once per round, 9 rounds, medians.
+/// Round-robin: every entry once per round, 3 unmeasured rounds and then
+/// 15 measured, medians.
 fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     use quick_noise::simd::SimdSliceIterExt;
     let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
@@ -322,11 +325,13 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
             black_box(&crackle_r);
         }),
     );
-    for _ in 0..9 {
+    for round in 0..3 + 15 {
         for e in entries.iter_mut() {
             let start = Instant::now();
             (e.run)();
-            e.rates.push(e.samples as f64 / start.elapsed().as_secs_f64() / 1e6);
+            if round >= 3 {
+                e.rates.push(e.samples as f64 / start.elapsed().as_secs_f64() / 1e6);
+            }
         }
     }
     let median = |v: &mut Vec<f64>| {
@@ -336,7 +341,7 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let medians: Vec<(&str, &str, f64)> = entries.iter_mut().map(|e| (e.name, e.case, median(&mut e.rates))).collect();
     let of = |name: &str, case: &str| medians.iter().find(|m| m.0 == name && m.1 == case).map(|m| m.2);
     println!();
-    println!("3D, one thread, same points at the same feature density; median M samples/s of 9 round-robin rounds");
+    println!("3D, one thread, same points at the same feature density; median M samples/s of 15 round-robin rounds after 3 unmeasured");
     println!(
         "build: RUSTFLAGS={:?}; compiled with avx2: {}, fma: {}, avx512f: {}; worley runs: {}",
         std::env::var("RUSTFLAGS").unwrap_or_default(),

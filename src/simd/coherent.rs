@@ -72,8 +72,12 @@ use super::{
 use crate::config::{Metric, Mode};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
 
-/// Rows of a grid per band; a band's cells are generated once.
+/// Rows of a grid per band on all cores; a band's cells are generated once.
 const BAND: usize = 64;
+/// Rows per band of a serial call: twice as many share the band's margin of
+/// cells (3D F1 on a 256 × 256 slice, 16 × 16 tiles: 297 → 333 M samples/s),
+/// where the parallel call keeps more bands for more cores.
+const SERIAL_BAND: usize = 128;
 /// Relative slack of the candidate and certificate tests.
 const SLACK_REL: f32 = 1.0 / 256.0;
 /// Absolute slack of the same tests, in lane units (2^−24 cells).
@@ -290,9 +294,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         Some(Axes { cell, f, sixteen: 2.0 * tile_width <= 1.0 })
     }
 
-    /// [`Simd::evaluate_grid`] by bands of [`BAND`] rows on the coherent
-    /// path, serially or on all cores; false (nothing written) if the grid
-    /// does not suit it.
+    /// [`Simd::evaluate_grid`] on the coherent path, serially by bands of
+    /// [`SERIAL_BAND`] rows or on all cores by bands of [`BAND`]; false
+    /// (nothing written) if the grid does not suit it.
     pub(super) fn grid_coherent(&self, grid: &Grid<D>, out: &mut [Features32<D, N>], parallel: bool) -> bool {
         let Some(axes) = self.grid_axes(grid) else {
             return false;
@@ -301,15 +305,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if width == 0 || out.is_empty() {
             return true;
         }
-        let band = |(b, dst): (usize, &mut [Features32<D, N>])| self.band(grid, &axes, b * BAND, dst);
         #[cfg(feature = "parallel")]
         if parallel {
             use rayon::prelude::*;
+            let band = |(b, dst): (usize, &mut [Features32<D, N>])| self.band(grid, &axes, b * BAND, dst);
             out.par_chunks_mut(BAND * width).enumerate().for_each(band);
             return true;
         }
         let _ = parallel;
-        out.chunks_mut(BAND * width).enumerate().for_each(band);
+        let band = |(b, dst): (usize, &mut [Features32<D, N>])| self.band(grid, &axes, b * SERIAL_BAND, dst);
+        out.chunks_mut(SERIAL_BAND * width).enumerate().for_each(band);
         true
     }
 

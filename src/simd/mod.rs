@@ -128,9 +128,9 @@ use lanes::{Eight, Lanes, One, WIDEST};
 /// and [`runtime_avx2`]).
 pub fn simd_level() -> &'static str {
     if cfg!(target_feature = "avx512f") {
-        "avx512f (slices in 16 lanes of 512 bits; 8-lane calls and grids on AVX2 paths)"
+        "avx512f (slices and grid tiles in 16 lanes of 512 bits; 8-lane calls on AVX2 paths)"
     } else if runtime_avx512() {
-        "avx512f at run time (a build without it: Euclidean slices run 16 AVX-512 lanes chosen because the CPU has them; Euclidean 8-lane calls and grids run their AVX2 copy)"
+        "avx512f at run time (a build without it: Euclidean slices and grid tiles run 16 AVX-512 lanes chosen because the CPU has them; Euclidean 8-lane calls run their AVX2 copy)"
     } else if cfg!(target_feature = "avx2") {
         "avx2"
     } else if runtime_avx2() {
