@@ -73,6 +73,7 @@ use crate::config::{Metric, Mode};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
 
 /// Rows of a grid per band on all cores; a band's cells are generated once.
+#[cfg(feature = "parallel")]
 const BAND: usize = 64;
 /// Rows per band of a serial call: twice as many share the band's margin of
 /// cells (3D F1 on a 256 × 256 slice, 16 × 16 tiles: 297 → 333 M samples/s),
@@ -295,7 +296,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// [`Simd::evaluate_grid`] on the coherent path, serially by bands of
-    /// [`SERIAL_BAND`] rows or on all cores by bands of [`BAND`]; false
+    /// [`SERIAL_BAND`] rows or on all cores by bands of `BAND`; false
     /// (nothing written) if the grid does not suit it.
     pub(super) fn grid_coherent(&self, grid: &Grid<D>, out: &mut [Features32<D, N>], parallel: bool) -> bool {
         let Some(axes) = self.grid_axes(grid) else {

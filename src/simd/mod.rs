@@ -64,6 +64,7 @@
 //!   plus a fraction for large worlds.
 //! - **Grids share their cells.** [`Simd::evaluate_grid`] generates the
 //!   points of a band of rows once and evaluates tiles of 8 × 8 samples
+//!   (16 × 16 in AVX-512 lanes)
 //!   against the few points that can matter to the tile, each broadcast to
 //!   every lane; lanes it cannot certify take the per-sample kernel
 //!   ([`Simd::coherent_grid`] says when the path applies). Deltas are
