@@ -69,15 +69,15 @@ use super::{
     distance_of_rank, per_axis, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski,
     Outputs, Simd, INVALID_ID, UNIT, WHOLE,
 };
-use crate::config::{Metric, Mode};
+use crate::config::{Metric, Mode, MAX_ORDER};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
 
 /// Rows of a grid per band on all cores; a band's cells are generated once.
 #[cfg(feature = "parallel")]
 const BAND: usize = 64;
 /// Rows per band of a serial call: twice as many share the band's margin of
-/// cells (3D F1 on a 256 × 256 slice, 16 × 16 tiles: 297 → 333 M samples/s),
-/// where the parallel call keeps more bands for more cores.
+/// cells, so fewer cells are generated twice (docs/simd.md has the
+/// measurement), where the parallel call keeps more bands for more cores.
 const SERIAL_BAND: usize = 128;
 /// Relative slack of the candidate and certificate tests.
 const SLACK_REL: f32 = 1.0 / 256.0;
@@ -503,7 +503,11 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 tile.reference[0] = c0.min(c1);
                 tile.hi[0] = c0.max(c1);
                 if far_apart || tile.hi[0] - tile.reference[0] > 1 {
-                    self.tile_apart(grid, first + r0, rows_here, x0, cols_here, &mut out[r0 * width..]);
+                    // Samples more than two cells apart: the per-sample kernel.
+                    for k in 0..rows_here {
+                        let o = (r0 + k) * width + x0;
+                        self.grid_range(grid, (first + r0 + k) * width + x0, &mut out[o..o + cols_here]);
+                    }
                     continue;
                 }
                 // Cells along axis 0 are monotone in x: the box's ends are
@@ -520,33 +524,6 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     let o = (r0 + k) * width + x0;
                     write_lanes::<L, D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
-            }
-        }
-    }
-
-    /// A tile whose samples span more than two cells on some axis, by the
-    /// per-sample kernel, eight samples at a time: `rows` rows from grid row
-    /// `row`, columns `x0..x0 + cols`, into `out` (whose first element is
-    /// the first row's column 0).
-    #[cold]
-    #[inline(never)]
-    fn tile_apart(
-        &self,
-        grid: &Grid<D>,
-        row: usize,
-        rows: usize,
-        x0: usize,
-        cols: usize,
-        out: &mut [Features32<D, N>],
-    ) {
-        let width = grid.size[0];
-        for k in 0..rows {
-            for c in (x0..x0 + cols).step_by(8) {
-                let n = (x0 + cols - c).min(8);
-                let start = (row + k) * width + c;
-                let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + i.min(n - 1)));
-                let o = k * width + c;
-                self.write8(&block, &mut out[o..o + n]);
             }
         }
     }
@@ -776,7 +753,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if N == 1 {
             return lanes_of::<L>(least[0])[..L::N].iter().fold(f32::INFINITY, |m, &v| m.min(v));
         }
-        let mut all = [f32::INFINITY; 16 * WIDEST];
+        let mut all = [f32::INFINITY; MAX_ORDER * WIDEST];
         for (k, l) in least.iter().enumerate() {
             all[L::N * k..L::N * (k + 1)].copy_from_slice(&lanes_of::<L>(*l)[..L::N]);
         }
