@@ -6,7 +6,8 @@
 //! Each case is the best of nine passes over 2^18 points: seeded random
 //! points in [−1000, 1000]^d, or a 512 × 512 grid with step 0.125 (in the
 //! plane x₂ = 0.5 beyond 2D) given as a slice of points (`evaluate_slice`)
-//! and as a [`Grid`] (`evaluate_grid`, the coherent path). Distances only,
+//! and as a [`Grid`] (the coherent path: `evaluate_grid`, whole results,
+//! and `evaluate_grid_distances`, the distances alone). `Outputs::Distances`,
 //! λ 5, Euclidean, exact mode.
 
 use std::time::Instant;
@@ -21,6 +22,7 @@ enum Points {
     Random,
     GridSlice,
     Grid,
+    GridDistances,
 }
 
 /// A case: its name and its measurement.
@@ -33,7 +35,7 @@ fn run<const D: usize, const N: usize>(points: Points) -> f64 {
         step: std::array::from_fn(|a| if a < 2 { 0.125 } else { 1.0 }),
         size: std::array::from_fn(|a| if a < 2 { 512 } else { 1 }),
     };
-    let use_grid = points == Points::Grid;
+    let case = points;
     let points: Vec<[f64; D]> = if points != Points::Random {
         (0..POINTS)
             .map(|i| std::array::from_fn(|a| if a < 2 { ((i >> (9 * a)) % 512) as f64 * 0.125 } else { 0.5 }))
@@ -42,13 +44,14 @@ fn run<const D: usize, const N: usize>(points: Points) -> f64 {
         (0..POINTS).map(|i| sample_point(7, i, 1000.0)).collect()
     };
     let mut out = vec![Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; POINTS];
+    let mut distances = vec![[0.0; N]; POINTS];
     let mut best = f64::MAX;
     for _ in 0..9 {
         let start = Instant::now();
-        if use_grid {
-            simd.evaluate_grid(std::hint::black_box(&grid), &mut out).unwrap();
-        } else {
-            simd.evaluate_slice(std::hint::black_box(&points), &mut out).unwrap();
+        match case {
+            Points::Grid => simd.evaluate_grid(std::hint::black_box(&grid), &mut out).unwrap(),
+            Points::GridDistances => simd.evaluate_grid_distances(std::hint::black_box(&grid), &mut distances).unwrap(),
+            Points::Random | Points::GridSlice => simd.evaluate_slice(std::hint::black_box(&points), &mut out).unwrap(),
         }
         best = best.min(start.elapsed().as_secs_f64());
     }
@@ -58,7 +61,7 @@ fn run<const D: usize, const N: usize>(points: Points) -> f64 {
 fn main() {
     println!("SIMD level: {}", worley::simd_level());
     println!("M samples/s, one thread, best of 9 passes over {POINTS} points");
-    println!("case      random  grid (slice)  grid (evaluate_grid)");
+    println!("case      random  grid (slice)  grid (evaluate_grid)  grid (evaluate_grid_distances)");
     let rows: [Case; 6] = [
         ("2D F1", run::<2, 1>),
         ("3D F1", run::<3, 1>),
@@ -68,6 +71,12 @@ fn main() {
         ("4D F2", run::<4, 2>),
     ];
     for (name, f) in rows {
-        println!("{name}  {:>9.2} {:>12.2} {:>12.2}", f(Points::Random), f(Points::GridSlice), f(Points::Grid));
+        println!(
+            "{name}  {:>9.2} {:>12.2} {:>12.2} {:>12.2}",
+            f(Points::Random),
+            f(Points::GridSlice),
+            f(Points::Grid),
+            f(Points::GridDistances)
+        );
     }
 }

@@ -30,7 +30,7 @@
 //! | one point | [`Simd::evaluate`], [`Simd::evaluate_f32`], [`Simd::evaluate_vec3`] (and `vec2`, `vec3a`, `vec4`) | the 1-lane instantiation of the kernel |
 //! | eight points (a ray packet) | [`Simd::evaluate8`], [`Simd::evaluate8_vec3`], [`Simd::evaluate_lanes`] | one `f32x8` per output and axis |
 //! | a slice of points | [`Simd::evaluate_slice`] into your buffer; [`Simd::evaluate_slice_parallel`] on all cores | any [`Point`]: `[f64; D]`, `[f32; D]`, glam vectors |
-//! | a regular grid or image tile | [`Simd::evaluate_grid`], [`Simd::evaluate_grid_parallel`]; [`Grid::fill_by_eights`] for your own shading per eight points | axis 0 fastest; dense grids share their cells' points ([`Simd::coherent_grid`]) |
+//! | a regular grid or image tile | [`Simd::evaluate_grid`], [`Simd::evaluate_grid_parallel`]; [`Simd::evaluate_grid_distances`] for the distances alone; [`Grid::fill_by_eights`] for your own shading per eight points | axis 0 fastest; dense grids share their cells' points ([`Simd::coherent_grid`]) |
 //! | a huge world | [`Simd::evaluate_in_cell`], [`Simd::evaluate8_in_cell`], [`Reference::evaluate_in_cell`] | an `i64` cell plus a fraction: no precision lost far from the origin |
 //! | a tileable texture | [`Simd::evaluate_periodic`], [`Simd::evaluate8_periodic`] with a [`Period`] | samples in cells |
 //! | combinations, fractal sums, gradients | [`texture::Texture`] | F2 − F1, Σ gain^i·C(lacunarity^i·x), analytic gradients |

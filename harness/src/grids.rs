@@ -22,8 +22,9 @@ pub struct GridIdentity {
     pub coherent: usize,
     /// Samples compared.
     pub samples: usize,
-    /// Samples whose distances, IDs or deltas differ in any bit from the
-    /// per-sample kernel's.
+    /// Samples whose distances, IDs or deltas from [`Simd::evaluate_grid`],
+    /// or whose distances from [`Simd::evaluate_grid_distances`], differ in
+    /// any bit from the per-sample kernel's.
     pub differing: usize,
 }
 
@@ -63,7 +64,8 @@ pub fn campaign_grid<const D: usize>(seed: u64, g: usize, range: f64, scale: f64
 }
 
 /// Evaluates `grids` grids of the campaign with `simd.evaluate_grid` and
-/// compares every sample with `simd.evaluate` at the same point, bit for bit.
+/// `simd.evaluate_grid_distances`, and compares every sample with
+/// `simd.evaluate` at the same point, bit for bit.
 pub fn grid_identity<const D: usize, const N: usize>(
     simd: &Simd<D, N>,
     seed: u64,
@@ -74,17 +76,23 @@ pub fn grid_identity<const D: usize, const N: usize>(
     let empty = Features32::<D, N> { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] };
     let mut found = GridIdentity::default();
     let mut out = Vec::new();
+    let mut distances = Vec::new();
     for g in 0..grids {
         let grid = campaign_grid::<D>(seed, g, range, scale);
         let n = grid.len().expect("small grids");
         out.clear();
         out.resize(n, empty);
         simd.evaluate_grid(&grid, &mut out).expect("the buffer fits the grid");
+        distances.clear();
+        distances.resize(n, [0.0; N]);
+        simd.evaluate_grid_distances(&grid, &mut distances).expect("the buffer fits the grid");
         found.grids += 1;
         found.coherent += usize::from(simd.coherent_grid(&grid));
-        for (i, got) in out.iter().enumerate() {
+        for (i, (got, d)) in out.iter().zip(&distances).enumerate() {
+            let want = simd.evaluate(grid.point(i));
             found.samples += 1;
-            found.differing += usize::from(!same_bits(got, &simd.evaluate(grid.point(i))));
+            let same_distances = d.map(f32::to_bits) == want.distance.map(f32::to_bits);
+            found.differing += usize::from(!same_bits(got, &want) || !same_distances);
         }
     }
     found

@@ -62,6 +62,10 @@ fn ours<const N: usize>(c: &mut Criterion, random: &[[f32; 3]], grid: &[[f32; 3]
     group.bench_function(BenchmarkId::new("worley-evaluate_grid", "grid"), |b| {
         b.iter(|| simd.evaluate_grid(black_box(&grid_spec()), &mut out).unwrap());
     });
+    let mut distances = vec![[0.0f32; N]; SIDE * SIDE];
+    group.bench_function(BenchmarkId::new("worley-evaluate_grid_distances", "grid"), |b| {
+        b.iter(|| simd.evaluate_grid_distances(black_box(&grid_spec()), &mut distances).unwrap());
+    });
     group.finish();
 }
 
@@ -214,11 +218,10 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         .fill(black_box(out))
     };
     let freq = FREQUENCY * STEP as f32;
-    let (mut o1, mut o2, mut o2i, mut o4) = (
+    let (mut o1, mut o2, mut o4) = (vec![[0f32; 1]; n], vec![[0f32; 2]; n], vec![[0f32; 4]; n]);
+    let (mut whole1, mut o2i) = (
         vec![Features32::<3, 1> { distance: [0.0; 1], delta: [[0.0; 3]; 1], id: [0; 1] }; n],
         vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; n],
-        vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; n],
-        vec![Features32::<3, 4> { distance: [0.0; 4], delta: [[0.0; 3]; 4], id: [0; 4] }; n],
     );
     let (mut qg, mut qr, mut crackle) = (vec![0f32; n], vec![0f32; random.len()], vec![0f32; n]);
     let (mut sr, mut sr2, mut crackle_r) =
@@ -283,16 +286,29 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
             }),
         );
     }
-    add(&mut entries, "worley evaluate_grid F1", "grid F1", n, Box::new(|| f1.evaluate_grid(&spec, &mut o1).unwrap()));
     add(
         &mut entries,
-        "worley evaluate_grid F2−F1",
+        "worley evaluate_grid_distances F1",
+        "grid F1",
+        n,
+        Box::new(|| f1.evaluate_grid_distances(&spec, &mut o1).unwrap()),
+    );
+    add(
+        &mut entries,
+        "worley evaluate_grid F1 (whole results)",
+        "grid F1",
+        n,
+        Box::new(|| f1.evaluate_grid(&spec, &mut whole1).unwrap()),
+    );
+    add(
+        &mut entries,
+        "worley evaluate_grid_distances F2−F1",
         "grid F2−F1",
         n,
         Box::new(|| {
-            f2.evaluate_grid(&spec, &mut o2).unwrap();
-            for (c, f) in crackle.iter_mut().zip(&o2) {
-                *c = f.distance[1] - f.distance[0];
+            f2.evaluate_grid_distances(&spec, &mut o2).unwrap();
+            for (c, d) in crackle.iter_mut().zip(&o2) {
+                *c = d[1] - d[0];
             }
             black_box(&crackle);
         }),
@@ -304,7 +320,13 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         n,
         Box::new(|| f2_ids.evaluate_grid(&spec, &mut o2i).unwrap()),
     );
-    add(&mut entries, "worley evaluate_grid F4", "grid F4", n, Box::new(|| f4.evaluate_grid(&spec, &mut o4).unwrap()));
+    add(
+        &mut entries,
+        "worley evaluate_grid_distances F4",
+        "grid F4",
+        n,
+        Box::new(|| f4.evaluate_grid_distances(&spec, &mut o4).unwrap()),
+    );
     add(
         &mut entries,
         "worley evaluate_slice F1",

@@ -43,7 +43,7 @@ use std::arch::x86_64::{
 };
 
 use super::batch::Point;
-use super::coherent::Band;
+use super::coherent::{Band, GridSample};
 use super::lanes::Lanes;
 use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
 
@@ -229,8 +229,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// # Safety
     /// As [`Simd::slice_avx512`].
     #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    unsafe fn tiles_avx512(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
-        self.tiles_for::<Avx512, 16, _>(Euclid, o, band, out)
+    unsafe fn tiles_avx512<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
+        self.tiles_for::<Avx512, 16, _, T>(Euclid, o, band, out)
     }
 }
 
@@ -257,11 +257,11 @@ pub(super) fn evaluate_slice<const D: usize, const N: usize, P: Point<D>>(
 /// lanes and returns true where the CPU has AVX-512; returns false, having
 /// written nothing, otherwise. The caller has checked that sixteen steps
 /// along axis 0 span at most one cell.
-pub(super) fn tiles<const D: usize, const N: usize>(
+pub(super) fn tiles<const D: usize, const N: usize, T: GridSample<D, N>>(
     simd: &Simd<D, N>,
     o: Outputs,
     band: &Band<'_, D>,
-    out: &mut [Features32<D, N>],
+    out: &mut [T],
 ) -> bool {
     if !runtime_avx512() {
         return false;

@@ -319,6 +319,39 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         Ok(())
     }
 
+    /// The distances alone of every point of a regular grid: F1..Fn of
+    /// point i in `out[i]`, the same bits as the `distance` field
+    /// [`Simd::evaluate_grid`] gives (NaN for a point whose coordinates are
+    /// bad input), whatever outputs the [`Simd`] was built for. It is the
+    /// call for a renderer that needs no IDs or deltas: on the coherent path
+    /// ([`Simd::coherent_grid`]) it computes and writes nothing else, 4·n
+    /// bytes per point where a [`Features32`] takes (4 + 4·d + 4)·n.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out.len() != grid.len()` (or the grid's size
+    /// overflows); nothing is written.
+    ///
+    /// ```
+    /// use worley::{Config, Grid, Outputs, Simd};
+    /// let basis = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Ids).unwrap();
+    /// let tile = Grid { origin: [0.0, 0.0, 0.5], step: [0.125, 0.125, 1.0], size: [64, 32, 1] };
+    /// let mut crackle = vec![[0.0; 2]; tile.len().unwrap()];
+    /// basis.evaluate_grid_distances(&tile, &mut crackle).unwrap();
+    /// let mut whole = vec![basis.evaluate([0.0; 3]); tile.len().unwrap()];
+    /// basis.evaluate_grid(&tile, &mut whole).unwrap();
+    /// assert!(crackle.iter().zip(&whole).all(|(d, f)| d.map(f32::to_bits) == f.distance.map(f32::to_bits)));
+    /// ```
+    pub fn evaluate_grid_distances(&self, grid: &Grid<D>, out: &mut [[f32; N]]) -> Result<(), SizeError> {
+        let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(SizeError { needed, given: out.len() });
+        }
+        if !self.grid_coherent(grid, out, false) {
+            super::coherent::GridSample::per_sample(self, grid, 0, out);
+        }
+        Ok(())
+    }
+
     /// [`Simd::evaluate_grid`] on all cores (rayon), in tiles of [`TILE`]
     /// points; the results are identical to the serial call's.
     ///

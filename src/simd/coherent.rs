@@ -67,7 +67,7 @@ use super::lanes::Sixteen;
 use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::{
     distance_of_rank, per_axis, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski,
-    Outputs, Simd, INVALID_ID, UNIT, WHOLE,
+    Outputs, PointConstants, Simd, INVALID_ID, UNIT, WHOLE,
 };
 use crate::config::{Metric, Mode, MAX_ORDER};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
@@ -103,8 +103,24 @@ pub(super) struct Region<const D: usize> {
 }
 
 impl<const D: usize> Region<D> {
-    /// The points of the cells `lo ..= hi` (inclusive per axis).
+    /// The points of the cells `lo ..= hi` (inclusive per axis), in the
+    /// widest lanes the build has.
     fn generate<const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D]) -> Self {
+        #[cfg(target_feature = "avx512f")]
+        return Self::generate_in::<Sixteen, N>(simd, lo, hi);
+        #[cfg(not(target_feature = "avx512f"))]
+        Self::generate_in::<Eight, N>(simd, lo, hi)
+    }
+
+    /// [`Region::generate`] in lanes `L`: the cells' hashes and populations
+    /// first, then each cell's points `L::N` at a time, point j in lane j
+    /// (the jump-ahead constants make point j one multiply-add of the cell's
+    /// hash). Every group of lanes is stored whole: the lanes past the
+    /// cell's population land where the next cell's points go, or in the
+    /// padding, and are overwritten or cleared. Integer arithmetic and an
+    /// exact conversion: the same values as one point at a time.
+    #[inline(always)]
+    fn generate_in<L: Lanes, const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D]) -> Self {
         let side: [usize; D] = std::array::from_fn(|a| (hi[a] - lo[a] + 1) as usize);
         let cells: usize = side.iter().product();
         // The axis words of each row of cells, mixed once per axis value.
@@ -113,37 +129,66 @@ impl<const D: usize> Region<D> {
         let keys = simd.pattern.keys();
         let table = simd.pattern.table();
         let ids = simd.outputs != Outputs::Distances;
-        let guess = cells * (table.mean().ceil() as usize + 1) + 8;
         let mut start = Vec::with_capacity(cells + 1);
-        let mut q: [Vec<f32>; D] = std::array::from_fn(|_| Vec::with_capacity(guess));
-        let mut x_cell = Vec::with_capacity(guess);
-        let mut id = Vec::with_capacity(if ids { guess } else { 0 });
+        let mut hashes = Vec::with_capacity(cells);
         let mut index = [0usize; D];
+        let mut total = 0u32;
         for _ in 0..cells {
-            start.push(x_cell.len() as u32);
+            start.push(total);
             let w: [u32; D] = std::array::from_fn(|a| words[a][index[a]]);
             let h = hash_words(keys, &w);
-            for p in &simd.points[..table.population(h) as usize] {
+            hashes.push(h);
+            total += table.population(h);
+            next_index(&mut index, &side);
+        }
+        start.push(total);
+        // The jump-ahead constants by point index, padded to whole groups.
+        let groups = simd.points.len().div_ceil(L::N).max(1);
+        let constants = |f: &dyn Fn(&PointConstants<D>) -> (u32, u32)| -> [Vec<u32>; 2] {
+            let mut m = vec![0; groups * L::N];
+            let mut c = vec![0; groups * L::N];
+            for (j, p) in simd.points.iter().enumerate() {
+                (m[j], c[j]) = f(p);
+            }
+            [m, c]
+        };
+        let coordinate: [[Vec<u32>; 2]; D] = std::array::from_fn(|a| constants(&|p| p.coordinate[a]));
+        let id_constants = constants(&|p| p.id);
+        let len = total as usize + WIDEST;
+        let mut q: [Vec<f32>; D] = std::array::from_fn(|_| vec![0.0; len]);
+        let mut x_cell = vec![0.0; len];
+        let mut id = vec![0; if ids { len } else { 0 }];
+        let mut index = [0usize; D];
+        for (i, &h) in hashes.iter().enumerate() {
+            let (s, e) = (start[i] as usize, start[i + 1] as usize);
+            let (hv, x) = (L::u(h), L::f(index[0] as f32));
+            let mut j = 0;
+            while s + j < e {
+                let at = s + j;
+                L::f_store(x, &mut x_cell[at..at + L::N]);
+                for (qa, [m, c]) in q.iter_mut().zip(&coordinate) {
+                    let state = L::u_add(L::u_mul(L::u_load(&m[j..j + L::N]), hv), L::u_load(&c[j..j + L::N]));
+                    L::f_store(L::u24_to_f(L::u_shr8(state)), &mut qa[at..at + L::N]);
+                }
                 if ids {
-                    id.push(feature_id(p.id.0.wrapping_mul(h).wrapping_add(p.id.1)));
+                    let [m, c] = &id_constants;
+                    let state = L::u_add(L::u_mul(L::u_load(&m[j..j + L::N]), hv), L::u_load(&c[j..j + L::N]));
+                    let mut lanes = [0u32; WIDEST];
+                    L::u_store(state, &mut lanes[..L::N]);
+                    for (o, &v) in id[at..at + L::N].iter_mut().zip(&lanes) {
+                        *o = feature_id(v);
+                    }
                 }
-                x_cell.push(index[0] as f32);
-                for (qa, (m, c)) in q.iter_mut().zip(p.coordinate) {
-                    qa.push((m.wrapping_mul(h).wrapping_add(c) >> 8) as f32);
-                }
+                j += L::N;
             }
-            for a in 0..D {
-                index[a] += 1;
-                if index[a] < side[a] {
-                    break;
-                }
-                index[a] = 0;
-            }
+            next_index(&mut index, &side);
         }
-        start.push(x_cell.len() as u32);
+        // The padding past the last point: zeros, whatever the last group
+        // stored there.
         for v in q.iter_mut().chain([&mut x_cell]) {
-            v.resize(v.len() + WIDEST, 0.0);
+            v[total as usize..].fill(0.0);
         }
+        id.truncate(total as usize);
         Region { origin: lo, side, start, q, x_cell, id }
     }
 
@@ -298,7 +343,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// [`Simd::evaluate_grid`] on the coherent path, serially by bands of
     /// [`SERIAL_BAND`] rows or on all cores by bands of `BAND`; false
     /// (nothing written) if the grid does not suit it.
-    pub(super) fn grid_coherent(&self, grid: &Grid<D>, out: &mut [Features32<D, N>], parallel: bool) -> bool {
+    pub(super) fn grid_coherent<T: GridSample<D, N>>(&self, grid: &Grid<D>, out: &mut [T], parallel: bool) -> bool {
         let Some(axes) = self.grid_axes(grid) else {
             return false;
         };
@@ -309,18 +354,18 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         #[cfg(feature = "parallel")]
         if parallel {
             use rayon::prelude::*;
-            let band = |(b, dst): (usize, &mut [Features32<D, N>])| self.band(grid, &axes, b * BAND, dst);
+            let band = |(b, dst): (usize, &mut [T])| self.band(grid, &axes, b * BAND, dst);
             out.par_chunks_mut(BAND * width).enumerate().for_each(band);
             return true;
         }
         let _ = parallel;
-        let band = |(b, dst): (usize, &mut [Features32<D, N>])| self.band(grid, &axes, b * SERIAL_BAND, dst);
+        let band = |(b, dst): (usize, &mut [T])| self.band(grid, &axes, b * SERIAL_BAND, dst);
         out.chunks_mut(SERIAL_BAND * width).enumerate().for_each(band);
         true
     }
 
     /// Rows `first..` of the grid into `out` (whole rows).
-    fn band(&self, grid: &Grid<D>, axes: &Axes<D>, first: usize, out: &mut [Features32<D, N>]) {
+    fn band<T: GridSample<D, N>>(&self, grid: &Grid<D>, axes: &Axes<D>, first: usize, out: &mut [T]) {
         let width = grid.size[0];
         let rows = out.len() / width;
         let row_cells = |r: usize| -> [i64; D] {
@@ -351,7 +396,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if cells.is_none_or(|n| n > 4 * out.len() as u128 + 256) {
             // Rows far apart: generating their cells would cost more than
             // it saves.
-            self.grid_range(grid, first * grid.size[0], out);
+            T::per_sample(self, grid, first * grid.size[0], out);
             return;
         }
         let band = Band { grid, axes, first, region: Region::generate(self, lo, hi) };
@@ -371,10 +416,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// per-sample kernel. Every lane runs the same operations, so the bits
     /// are the same whichever is taken.
     #[inline(always)]
-    fn tiles_euclid(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
+    fn tiles_euclid<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
         #[cfg(target_feature = "avx512f")]
         if band.axes.sixteen {
-            return self.tiles_for::<Sixteen, 16, _>(Euclid, o, band, out);
+            return self.tiles_for::<Sixteen, 16, _, T>(Euclid, o, band, out);
         }
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
         if band.axes.sixteen && super::avx512::tiles(self, o, band, out) {
@@ -387,46 +432,47 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             #[allow(unsafe_code)]
             return unsafe { self.tiles_avx2(o, band, out) };
         }
-        self.tiles_for::<Eight, 8, _>(Euclid, o, band, out)
+        self.tiles_for::<Eight, 8, _, T>(Euclid, o, band, out)
     }
 
     /// [`Simd::tiles_euclid`]'s eight-lane loops compiled with AVX2 enabled.
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[target_feature(enable = "avx2")]
-    fn tiles_avx2(&self, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
-        self.tiles_for::<Eight, 8, _>(Euclid, o, band, out)
+    fn tiles_avx2<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
+        self.tiles_for::<Eight, 8, _, T>(Euclid, o, band, out)
     }
 
     /// The tile loop in lanes `L` (`K` = `L::N`) for the outputs asked for.
     #[inline(always)]
-    pub(super) fn tiles_for<L: Lanes, const K: usize, M: Metric32>(
+    pub(super) fn tiles_for<L: Lanes, const K: usize, M: Metric32, T: GridSample<D, N>>(
         &self,
         m: M,
         o: Outputs,
         band: &Band<'_, D>,
-        out: &mut [Features32<D, N>],
+        out: &mut [T],
     ) {
         match o {
-            Outputs::Distances => self.tiles::<L, K, M, false, false>(m, band, out),
-            Outputs::Ids => self.tiles::<L, K, M, true, false>(m, band, out),
-            Outputs::IdsAndDeltas => self.tiles::<L, K, M, true, true>(m, band, out),
+            _ if !T::FULL => self.tiles::<L, K, M, T, false, false>(m, band, out),
+            Outputs::Distances => self.tiles::<L, K, M, T, false, false>(m, band, out),
+            Outputs::Ids => self.tiles::<L, K, M, T, true, false>(m, band, out),
+            Outputs::IdsAndDeltas => self.tiles::<L, K, M, T, true, true>(m, band, out),
         }
     }
 
     /// The other metrics' tile loops, eight lanes, out of line (as
     /// `search_outputs`).
     #[inline(never)]
-    fn tiles_outputs<M: Metric32>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [Features32<D, N>]) {
-        self.tiles_for::<Eight, 8, M>(m, o, band, out)
+    fn tiles_outputs<M: Metric32, T: GridSample<D, N>>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
+        self.tiles_for::<Eight, 8, M, T>(m, o, band, out)
     }
 
     /// Every tile of a band, `K` = `L::N` samples along axis 0 by `K` rows.
     #[inline(always)]
-    fn tiles<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+    fn tiles<L: Lanes, const K: usize, M: Metric32, T: GridSample<D, N>, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         band: &Band<'_, D>,
-        out: &mut [Features32<D, N>],
+        out: &mut [T],
     ) {
         debug_assert_eq!(K, L::N);
         let Band { grid, axes, first, ref region } = *band;
@@ -506,7 +552,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     // Samples more than two cells apart: the per-sample kernel.
                     for k in 0..rows_here {
                         let o = (r0 + k) * width + x0;
-                        self.grid_range(grid, (first + r0 + k) * width + x0, &mut out[o..o + cols_here]);
+                        T::per_sample(self, grid, (first + r0 + k) * width + x0, &mut out[o..o + cols_here]);
                     }
                     continue;
                 }
@@ -522,7 +568,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<L, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
-                    write_lanes::<L, D, N, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
+                    T::write::<L, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
             }
         }
@@ -886,8 +932,73 @@ fn next_cell<const D: usize>(c: &mut [i64; D], lo: [i64; D], hi: [i64; D]) -> bo
     false
 }
 
+/// The next index of a box of `side` cells, axis 0 fastest (wrapping to
+/// zero after the last).
+#[inline(always)]
+fn next_index<const D: usize>(index: &mut [usize; D], side: &[usize; D]) {
+    for a in 0..D {
+        index[a] += 1;
+        if index[a] < side[a] {
+            return;
+        }
+        index[a] = 0;
+    }
+}
+
 fn min_max(v: &[i64]) -> (i64, i64) {
     v.iter().fold((i64::MAX, i64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)))
+}
+
+/// What the coherent grid path writes per sample: whole results
+/// ([`Features32`], the outputs the [`Simd`] was built for) or the distances
+/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]).
+pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send {
+    /// Whether the tiles compute the outputs the [`Simd`] was built for;
+    /// false: distances only, whatever it was built for (the distances are
+    /// the same bits either way).
+    const FULL: bool;
+    /// Up to [`Lanes::N`] lanes of a finished result into `dst`.
+    fn write<L: Lanes, const IDS: bool, const DELTAS: bool>(b: &Best<L, D, N>, dst: &mut [Self]);
+    /// Grid points `first..first + dst.len()` by the per-sample kernel.
+    fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]);
+}
+
+impl<const D: usize, const N: usize> GridSample<D, N> for Features32<D, N> {
+    const FULL: bool = true;
+    #[inline(always)]
+    fn write<L: Lanes, const IDS: bool, const DELTAS: bool>(b: &Best<L, D, N>, dst: &mut [Self]) {
+        write_lanes::<L, D, N, IDS, DELTAS>(b, dst)
+    }
+    fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {
+        simd.grid_range(grid, first, dst)
+    }
+}
+
+impl<const D: usize, const N: usize> GridSample<D, N> for [f32; N] {
+    const FULL: bool = false;
+    #[inline(always)]
+    fn write<L: Lanes, const IDS: bool, const DELTAS: bool>(b: &Best<L, D, N>, dst: &mut [Self]) {
+        if N == 1 && dst.len() == L::N {
+            // One store of the lanes, the common case of a full tile row.
+            return L::f_store(b.rank[0], dst.as_flattened_mut());
+        }
+        let mut distance = [[0.0; WIDEST]; N];
+        for (k, lanes) in distance.iter_mut().enumerate() {
+            L::f_store(b.rank[k], &mut lanes[..L::N]);
+        }
+        for (i, o) in dst.iter_mut().enumerate() {
+            *o = std::array::from_fn(|k| distance[k][i]);
+        }
+    }
+    fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {
+        let mut whole = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 8];
+        for (c, chunk) in dst.chunks_mut(8).enumerate() {
+            simd.grid_range(grid, first + c * 8, &mut whole[..chunk.len()]);
+            for (o, f) in chunk.iter_mut().zip(&whole) {
+                *o = f.distance;
+            }
+        }
+    }
 }
 
 /// Up to [`Lanes::N`] lanes of a finished result into `dst`. Without `IDS`

@@ -70,6 +70,8 @@
 //!   ([`Simd::coherent_grid`] says when the path applies). Deltas are
 //!   computed exactly as the per-sample kernel computes them, so a grid
 //!   sample is that kernel's result bit for bit.
+//!   [`Simd::evaluate_grid_distances`] runs the same tiles and writes the
+//!   distances alone, 4 bytes per sample and order.
 //! - **Ties** are ordered by ID: of two points at the same rank the one with
 //!   the smaller ID comes first (see [`reference`](crate::reference)), so
 //!   paths that meet points in different orders agree on IDs and deltas.
