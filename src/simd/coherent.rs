@@ -98,18 +98,19 @@ pub(super) struct Region<const D: usize> {
     /// Each point's cell along axis 0, from the region's first (exact:
     /// fewer than 2^24 cells), padded like `q`.
     x_cell: Vec<f32>,
-    /// IDs, when the outputs ask for them (empty otherwise).
+    /// IDs, when the tiles read them (whole results with IDs; empty
+    /// otherwise).
     id: Vec<u32>,
 }
 
 impl<const D: usize> Region<D> {
-    /// The points of the cells `lo ..= hi` (inclusive per axis), in the
-    /// widest lanes the build has.
-    fn generate<const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D]) -> Self {
+    /// The points of the cells `lo ..= hi` (inclusive per axis), with
+    /// their IDs if `ids`, in the widest lanes the build has.
+    fn generate<const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D], ids: bool) -> Self {
         #[cfg(target_feature = "avx512f")]
-        return Self::generate_in::<Sixteen, N>(simd, lo, hi);
+        return Self::generate_in::<Sixteen, N>(simd, lo, hi, ids);
         #[cfg(not(target_feature = "avx512f"))]
-        Self::generate_in::<Eight, N>(simd, lo, hi)
+        Self::generate_in::<Eight, N>(simd, lo, hi, ids)
     }
 
     /// [`Region::generate`] in lanes `L`: the cells' hashes and populations
@@ -120,7 +121,7 @@ impl<const D: usize> Region<D> {
     /// padding, and are overwritten or cleared. Integer arithmetic and an
     /// exact conversion: the same values as one point at a time.
     #[inline(always)]
-    fn generate_in<L: Lanes, const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D]) -> Self {
+    fn generate_in<L: Lanes, const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D], ids: bool) -> Self {
         let side: [usize; D] = std::array::from_fn(|a| (hi[a] - lo[a] + 1) as usize);
         let cells: usize = side.iter().product();
         // The axis words of each row of cells, mixed once per axis value.
@@ -128,7 +129,6 @@ impl<const D: usize> Region<D> {
             std::array::from_fn(|a| (0..side[a]).map(|i| axis_word(a, axis_term(lo[a] + i as i64))).collect());
         let keys = simd.pattern.keys();
         let table = simd.pattern.table();
-        let ids = simd.outputs != Outputs::Distances;
         let mut start = Vec::with_capacity(cells + 1);
         let mut hashes = Vec::with_capacity(cells);
         let mut index = [0usize; D];
@@ -399,7 +399,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             T::per_sample(self, grid, first * grid.size[0], out);
             return;
         }
-        let band = Band { grid, axes, first, region: Region::generate(self, lo, hi) };
+        // IDs only where the tiles read them: whole results with IDs asked for.
+        let ids = T::FULL && self.outputs != Outputs::Distances;
+        let band = Band { grid, axes, first, region: Region::generate(self, lo, hi, ids) };
         match (self.config.metric, self.outputs) {
             (Metric::Euclidean, o) => self.tiles_euclid(o, &band, out),
             (Metric::Manhattan, o) => self.tiles_outputs(Manhattan, o, &band, out),
