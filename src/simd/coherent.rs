@@ -131,15 +131,15 @@ impl<const D: usize> Region<D> {
         let table = simd.pattern.table();
         let mut start = Vec::with_capacity(cells + 1);
         let mut hashes = Vec::with_capacity(cells);
-        let mut index = [0usize; D];
+        let mut c = lo;
         let mut total = 0u32;
         for _ in 0..cells {
             start.push(total);
-            let w: [u32; D] = std::array::from_fn(|a| words[a][index[a]]);
+            let w: [u32; D] = std::array::from_fn(|a| words[a][(c[a] - lo[a]) as usize]);
             let h = hash_words(keys, &w);
             hashes.push(h);
             total += table.population(h);
-            next_index(&mut index, &side);
+            next_cell(&mut c, lo, hi);
         }
         start.push(total);
         // The jump-ahead constants by point index, padded to whole groups.
@@ -158,10 +158,10 @@ impl<const D: usize> Region<D> {
         let mut q: [Vec<f32>; D] = std::array::from_fn(|_| vec![0.0; len]);
         let mut x_cell = vec![0.0; len];
         let mut id = vec![0; if ids { len } else { 0 }];
-        let mut index = [0usize; D];
         for (i, &h) in hashes.iter().enumerate() {
             let (s, e) = (start[i] as usize, start[i + 1] as usize);
-            let (hv, x) = (L::u(h), L::f(index[0] as f32));
+            // Cells are numbered with axis 0 fastest.
+            let (hv, x) = (L::u(h), L::f((i % side[0]) as f32));
             let mut j = 0;
             while s + j < e {
                 let at = s + j;
@@ -181,7 +181,6 @@ impl<const D: usize> Region<D> {
                 }
                 j += L::N;
             }
-            next_index(&mut index, &side);
         }
         // The padding past the last point: zeros, whatever the last group
         // stored there.
@@ -453,8 +452,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         band: &Band<'_, D>,
         out: &mut [T],
     ) {
-        match o {
-            _ if !T::FULL => self.tiles::<L, K, M, T, false, false>(m, band, out),
+        // Distances alone compute nothing else, whatever the Simd was built for.
+        match if T::FULL { o } else { Outputs::Distances } {
             Outputs::Distances => self.tiles::<L, K, M, T, false, false>(m, band, out),
             Outputs::Ids => self.tiles::<L, K, M, T, true, false>(m, band, out),
             Outputs::IdsAndDeltas => self.tiles::<L, K, M, T, true, true>(m, band, out),
@@ -932,19 +931,6 @@ fn next_cell<const D: usize>(c: &mut [i64; D], lo: [i64; D], hi: [i64; D]) -> bo
         c[a] = lo[a];
     }
     false
-}
-
-/// The next index of a box of `side` cells, axis 0 fastest (wrapping to
-/// zero after the last).
-#[inline(always)]
-fn next_index<const D: usize>(index: &mut [usize; D], side: &[usize; D]) {
-    for a in 0..D {
-        index[a] += 1;
-        if index[a] < side[a] {
-            return;
-        }
-        index[a] = 0;
-    }
 }
 
 fn min_max(v: &[i64]) -> (i64, i64) {
