@@ -565,7 +565,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 tile.bhi[0] = p0.max(p1);
                 tile.x_f = load::<L>(&x_f, x0);
                 tile.x_cl = L::sub(load::<L>(&x_cell, x0), L::f(shift));
-                self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, &mut best);
+                self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, !T::FULL, &mut best);
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<L, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
@@ -628,7 +628,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// One tile: the points of its own cells, the bound they give, the
     /// other candidates, the certificate, and the per-sample kernel for
     /// lanes left uncertified. Ranks in lane units. `rows` and `near` are
-    /// the tile row's, from [`Simd::cell_rows`].
+    /// the tile row's, from [`Simd::cell_rows`]. `local`: the caller
+    /// writes the distances alone, so that the search may run on a local
+    /// copy of the ranks.
     #[inline(always)]
     fn tile<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
@@ -637,11 +639,45 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         t: &Tile<L, D>,
         rows: &[CellRow<L, D>],
         near: &[f32],
+        local: bool,
         best: &mut [Best<L, D, N>; K],
     ) {
-        for b in best.iter_mut() {
-            b.reset::<IDS, DELTAS>();
+        let open = if local && !IDS && !DELTAS && N * K <= 32 {
+            // The ranks in a local array that never leaves this function,
+            // so that they stay in registers through the candidates (at
+            // most 32 vectors, the AVX-512 register file). Measured only
+            // where it pays: 1.06-1.21x on the distances alone, and
+            // 0.9x on whole results, whose writing keeps them in memory.
+            let mut local: [Best<L, D, N>; K] = per_axis(|_| Best::empty());
+            let open = self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, rows, near, &mut local);
+            for (b, l) in best.iter_mut().zip(&local) {
+                b.rank = l.rank;
+            }
+            open
+        } else {
+            for b in best.iter_mut() {
+                b.reset::<IDS, DELTAS>();
+            }
+            self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, rows, near, best)
+        };
+        if let Some(certified) = open {
+            self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
         }
+    }
+
+    /// [`Simd::tile`]'s search into `best` (which must start empty): the
+    /// lanes certified per row, or `None` if every lane is.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn tile_search<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        region: &Region<D>,
+        t: &Tile<L, D>,
+        rows: &[CellRow<L, D>],
+        near: &[f32],
+        best: &mut [Best<L, D, N>; K],
+    ) -> Option<[u32; K]> {
         let (blo, bhi) = (L::f(t.blo[0]), L::f(t.bhi[0]));
         // The searched cells (the tile's own and one more on each side).
         let lo: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
@@ -676,12 +712,11 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 
         // The bound: the largest F_n of any lane so far (of the cells
         // around when the own cells hold fewer than n points).
-        let bound = best.iter().fold(L::f(0.0), |m, b| L::max(m, b.rank[N - 1]));
-        let mut bound = lanes_of::<L>(bound)[..L::N].iter().fold(0.0, |m: f32, &v| m.max(v));
+        let mut bound = largest::<L, K>(std::array::from_fn(|k| best[k].rank[N - 1]));
         if bound == f32::INFINITY {
             bound = self.bound(metric, region, t, lo, hi);
             if bound == f32::INFINITY {
-                return self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, [0; K]);
+                return Some([0; K]);
             }
         }
         let once = inflate(distance_of_rank::<One>(self.config.metric, bound));
@@ -754,9 +789,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             certified[k] = L::bits(ok);
         }
         if certified.iter().all(|&m| m == all) {
-            return;
+            return None;
         }
-        self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
+        Some(certified)
     }
 
     /// The n-th smallest farthest distance (as a rank) from the tile's box
@@ -896,6 +931,29 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             b.delta = per_axis(|j| per_axis(|a| lanes_from::<L>(&delta[j][a])));
         }
     }
+}
+
+/// The largest value in any lane of `v`, by halving trees (a short chain
+/// of dependent operations: the tile's scan waits for it).
+#[inline(always)]
+fn largest<L: Lanes, const K: usize>(mut v: [L::F; K]) -> f32 {
+    debug_assert!(K.is_power_of_two() && L::N.is_power_of_two());
+    let mut width = K;
+    while width > 1 {
+        width /= 2;
+        for k in 0..width {
+            v[k] = L::max(v[k], v[k + width]);
+        }
+    }
+    let mut a = lanes_of::<L>(v[0]);
+    let mut width = L::N;
+    while width > 1 {
+        width /= 2;
+        for i in 0..width {
+            a[i] = a[i].max(a[i + width]);
+        }
+    }
+    a[0]
 }
 
 /// `L::N` values from `v[at..]` (the region's padding keeps it in bounds).
