@@ -71,6 +71,7 @@ use super::{
 };
 use crate::config::{Metric, Mode, MAX_ORDER};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
+use std::cell::Cell;
 
 /// Rows of a grid per band on all cores; a band's cells are generated once.
 #[cfg(feature = "parallel")]
@@ -700,12 +701,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let reference = (t.reference[0] - region.origin[0]) as f32;
         let shift = |cell: f32| L::sub(t.x_f, L::sub(L::f((cell - reference) * UNIT), t.x_cl));
 
+        let spill = Spill::default();
+        let spill = (&spill, std::hint::black_box(&spill));
+
         // The tile's own cells: every point is a candidate.
         for row in rows.iter().filter(|r| r.own) {
             for xc in x_cells.iter().filter(|xc| xc.own) {
                 let (i, x_shift) = (row.base + xc.index, shift(xc.index as f32));
                 for p in region.start[i] as usize..region.start[i + 1] as usize {
-                    self.candidate::<L, K, M, IDS, DELTAS>(metric, region, p, x_shift, &row.shift, best);
+                    self.candidate::<L, K, M, IDS, DELTAS>(metric, region, p, x_shift, &row.shift, spill, best);
                 }
             }
         }
@@ -757,6 +761,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                         p,
                         shift(region.x_cell[p]),
                         &row.shift,
+                        spill,
                         best,
                     );
                 }
@@ -857,6 +862,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         p: usize,
         x_shift: L::F,
         row_shift: &[L::F; D],
+        (spill, spilled): (&Spill, &Spill),
         best: &mut [Best<L, D, N>; K],
     ) {
         let dx = L::sub(x_shift, L::f(region.q[0][p]));
@@ -868,9 +874,11 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let delta = |k: usize| -> [L::F; D] { per_axis(|a| if a == 0 { dx } else { L::f(d_row_lanes[a][k]) }) };
         if M::SPLITS && D > 1 {
             let first = metric.term::<L>(dx);
-            let rest = lanes_of::<L>(metric.rest::<L, D>(&d_row));
+            for (cell, v) in spill.0.iter().zip(lanes_of::<L>(metric.rest::<L, D>(&d_row))) {
+                cell.set(v);
+            }
             for (k, b) in best.iter_mut().enumerate() {
-                let rank = metric.fold::<L>(L::f(rest[k]), first);
+                let rank = metric.fold::<L>(L::f(spilled.0[k].get()), first);
                 let delta = if DELTAS { delta(k) } else { [L::f(0.0); D] };
                 b.insert::<IDS, DELTAS>(rank, delta, id);
             }
@@ -932,6 +940,17 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
     }
 }
+
+/// Where a candidate's rests of the rank per row of samples wait for the
+/// rows to read them: in memory, read one at a time. Held in a register
+/// instead, each row's value is moved across lanes by a shuffle, sixteen per
+/// candidate in AVX-512 lanes, and these took a third of the insertions'
+/// time; read from memory, the load that feeds the addition broadcasts it.
+/// A tile writes through one reference and reads through another that the
+/// compiler cannot see to be the same ([`std::hint::black_box`], once per
+/// tile), so that it keeps the loads: 1.1x on the 3D F1 grid (docs/simd.md).
+#[derive(Default)]
+struct Spill([Cell<f32>; WIDEST]);
 
 /// The largest value in any lane of `v`, by halving trees (a short chain
 /// of dependent operations: the tile's scan waits for it).
