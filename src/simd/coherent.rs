@@ -566,7 +566,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 tile.bhi[0] = p0.max(p1);
                 tile.x_f = load::<L>(&x_f, x0);
                 tile.x_cl = L::sub(load::<L>(&x_cell, x0), L::f(shift));
-                self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, &cell_rows, &near, !T::FULL, &mut best);
+                self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, (&cell_rows, &near), !T::FULL, &mut best);
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<L, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
@@ -638,17 +638,20 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         metric: M,
         region: &Region<D>,
         t: &Tile<L, D>,
-        rows: &[CellRow<L, D>],
-        near: &[f32],
+        (rows, near): (&[CellRow<L, D>], &[f32]),
         local: bool,
         best: &mut [Best<L, D, N>; K],
     ) {
-        let open = if local && !IDS && !DELTAS && N * K <= 32 {
+        // Sixteen lanes run only with AVX-512 and its 32 vector registers;
+        // eight may run with AVX2 and its 16.
+        let fits = N <= if K >= 16 { 2 } else { 1 };
+        let open = if local && !IDS && !DELTAS && fits {
             // The ranks in a local array that never leaves this function,
-            // so that they stay in registers through the candidates (at
-            // most 32 vectors, the AVX-512 register file). Measured only
-            // where it pays: 1.06-1.21x on the distances alone, and
-            // 0.9x on whole results, whose writing keeps them in memory.
+            // so that they stay in registers through the candidates, at
+            // most half the register file. Measured only where it pays:
+            // 1.06-1.21x on the distances alone, 0.88x on F4 in sixteen
+            // lanes (64 vectors), and 0.9x on whole results, whose writing
+            // keeps them in memory.
             let mut local: [Best<L, D, N>; K] = per_axis(|_| Best::empty());
             let open = self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, rows, near, &mut local);
             for (b, l) in best.iter_mut().zip(&local) {
@@ -709,7 +712,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             for xc in x_cells.iter().filter(|xc| xc.own) {
                 let (i, x_shift) = (row.base + xc.index, shift(xc.index as f32));
                 for p in region.start[i] as usize..region.start[i + 1] as usize {
-                    self.candidate::<L, K, M, IDS, DELTAS>(metric, region, p, x_shift, &row.shift, spill, best);
+                    self.candidate::<L, K, M, IDS, DELTAS>(metric, region, p, (x_shift, &row.shift), spill, best);
                 }
             }
         }
@@ -759,8 +762,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                         metric,
                         region,
                         p,
-                        shift(region.x_cell[p]),
-                        &row.shift,
+                        (shift(region.x_cell[p]), &row.shift),
                         spill,
                         best,
                     );
@@ -853,15 +855,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// `x_shift` is each lane's position minus the point's cell corner on
     /// axis 0, `row_shift` each row's on the other axes. Its delta is
     /// `shift − q` on every axis, so a row shares the rest of the rank
-    /// ([`Metric32::rest`]) and only axis 0's term is per lane.
+    /// ([`Metric32::rest`]) and only axis 0's term is per lane; the rest
+    /// is written through the first reference of `spill` and read through
+    /// the second (see [`Spill`]).
     #[inline(always)]
     fn candidate<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         region: &Region<D>,
         p: usize,
-        x_shift: L::F,
-        row_shift: &[L::F; D],
+        (x_shift, row_shift): (L::F, &[L::F; D]),
         (spill, spilled): (&Spill, &Spill),
         best: &mut [Best<L, D, N>; K],
     ) {
