@@ -652,9 +652,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             // 1.06-1.21x on the distances alone, 0.88x on F4 in sixteen
             // lanes (64 vectors), and 0.9x on whole results, whose writing
             // keeps them in memory.
-            let mut local: [Best<L, D, N>; K] = per_axis(|_| Best::empty());
-            let open = self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, rows, near, &mut local);
-            for (b, l) in best.iter_mut().zip(&local) {
+            let mut ranks: [Best<L, D, N>; K] = per_axis(|_| Best::empty());
+            let open = self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, (rows, near), &mut ranks);
+            for (b, l) in best.iter_mut().zip(&ranks) {
                 b.rank = l.rank;
             }
             open
@@ -662,7 +662,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             for b in best.iter_mut() {
                 b.reset::<IDS, DELTAS>();
             }
-            self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, rows, near, best)
+            self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, (rows, near), best)
         };
         if let Some(certified) = open {
             self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
@@ -672,14 +672,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// [`Simd::tile`]'s search into `best` (which must start empty): the
     /// lanes certified per row, or `None` if every lane is.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn tile_search<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         region: &Region<D>,
         t: &Tile<L, D>,
-        rows: &[CellRow<L, D>],
-        near: &[f32],
+        (rows, near): (&[CellRow<L, D>], &[f32]),
         best: &mut [Best<L, D, N>; K],
     ) -> Option<[u32; K]> {
         let (blo, bhi) = (L::f(t.blo[0]), L::f(t.bhi[0]));
