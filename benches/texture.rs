@@ -2,14 +2,15 @@
 //! [−1000, 1000]^3: F1 alone, F2 − F1 and F1·F2, fractal sums of 2 and 4
 //! octaves, and analytic gradients; and the paper's claim that F1 and F2
 //! together cost about as much as one scale of Perlin noise (improved
-//! noise, 8 lanes).
+//! noise, 8 lanes). And texture grids: whole grids against the same values
+//! eight points at a time.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
 use std::time::Duration;
 use worley::perlin::Perlin;
 use worley::texture::{Combination, Fractal, Texture};
-use worley::{Config, Features32, Outputs, Simd};
+use worley::{Config, Features32, Grid, Outputs, Simd};
 use worley_harness::sample_point;
 
 const POINTS: usize = 4096;
@@ -64,6 +65,40 @@ fn textures(c: &mut Criterion) {
     group.finish();
 }
 
+/// A texture over a 256 × 256 slice of a 3D grid (a sixteenth of a unit
+/// apart): [`Texture::values_grid`] against the same values eight points at
+/// a time through [`Texture::value8`], the same bits. Both run on all cores
+/// with the `parallel` feature; `RAYON_NUM_THREADS=1` measures one core.
+fn texture_grids(c: &mut Criterion) {
+    let mut group = c.benchmark_group("texture-grid/3d");
+    let grid = Grid { origin: [0.3, -0.7, 0.5], step: [0.0625, 0.0625, 1.0], size: [256, 256, 1] };
+    group.throughput(Throughput::Elements(grid.len().unwrap() as u64));
+    group.sample_size(20).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    let mut out = vec![0f32; grid.len().unwrap()];
+    let config = Config::default();
+    type Run = Box<dyn Fn(&Grid<3>, &mut [f32], bool)>;
+    fn both<const N: usize>(t: Texture<3, N>) -> Run {
+        Box::new(move |g, o, whole| {
+            if whole {
+                t.values_grid(g, o).unwrap()
+            } else {
+                g.fill_by_eights(o, |x| t.value8(x).to_array()).unwrap()
+            }
+        })
+    }
+    let cases: Vec<(&str, Run)> = vec![
+        ("F1", both(Texture::<3, 1>::new(config, Combination::f(1), Fractal::default(), None).unwrap())),
+        ("F2-F1", both(Texture::<3, 2>::new(config, Combination::crackle(), Fractal::default(), None).unwrap())),
+        ("G1-4-octaves", both(Texture::<3, 1>::new(config, Combination::f(1), Fractal::octaves(4), None).unwrap())),
+    ];
+    for (name, run) in &cases {
+        for (path, whole) in [("by-eights", false), ("values_grid", true)] {
+            group.bench_function(BenchmarkId::new(path, name), |b| b.iter(|| run(black_box(&grid), &mut out, whole)));
+        }
+    }
+    group.finish();
+}
+
 /// F1 and F2 together (distances only) against one octave of Perlin noise,
 /// both eight lanes per call.
 fn perlin_ratio(c: &mut Criterion) {
@@ -86,5 +121,5 @@ fn perlin_ratio(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, textures, perlin_ratio);
+criterion_group!(benches, textures, texture_grids, perlin_ratio);
 criterion_main!(benches);

@@ -20,7 +20,7 @@
 use wide::f32x8;
 
 use crate::config::{Config, ConfigError, Metric};
-use crate::simd::{Features8, Outputs, Period, PeriodError, Point, Simd};
+use crate::simd::{Features8, GridRows, Outputs, Period, PeriodError, Point, Simd};
 
 /// How F1..Fn are combined into one value.
 #[derive(Clone, Debug, PartialEq)]
@@ -494,7 +494,18 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     }
 
     /// Values of every point of a grid (axis 0 fastest), on all cores when
-    /// the `parallel` feature is on; identical to the serial result.
+    /// the `parallel` feature is on; identical to the serial result and to
+    /// [`Texture::value`] at each [`Grid::point`](crate::Grid::point).
+    ///
+    /// Without a period, and when every octave's frequency is a power of two
+    /// (the default lacunarity 2), octave i of the grid is itself a grid,
+    /// with origin and step scaled by its frequency, whose points are the
+    /// octave's coordinates bit for bit (scaling by a power of two is exact
+    /// and commutes with rounding): each octave then takes the coherent grid
+    /// path of [`Simd::evaluate_grid_distances`], a band of rows at a time
+    /// for all octaves, and the combination and the sum run in the order
+    /// [`Texture::value8`] runs them. Other textures take eight points at a
+    /// time through [`Texture::value8`].
     ///
     /// # Errors
     /// [`crate::SizeError`] if `out.len() != grid.len()`.
@@ -509,7 +520,68 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// assert_eq!(image[32 + 3], t.value(grid.point(32 + 3)));
     /// ```
     pub fn values_grid(&self, grid: &crate::Grid<D>, out: &mut [f32]) -> Result<(), crate::SizeError> {
-        grid.fill_by_eights(out, |block| self.value8(block).to_array())
+        let Some(octaves) = self.octave_grids(grid) else {
+            return grid.fill_by_eights(out, |block| self.value8(block).to_array());
+        };
+        let needed = grid.len().ok_or(crate::SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(crate::SizeError { needed, given: out.len() });
+        }
+        let width = grid.size[0];
+        if needed == 0 {
+            return Ok(());
+        }
+        let rows: Vec<GridRows<'_, D>> = octaves.iter().map(|g| self.values.grid_rows(g)).collect();
+        // Rows `first..` of every octave, combined and summed into `dst`.
+        let band = |first: usize, dst: &mut [f32]| {
+            let mut distances = vec![[0f32; N]; dst.len()];
+            for (i, (octave, &(_, amplitude, _))) in rows.iter().zip(&self.octaves).enumerate() {
+                self.values.grid_rows_distances(octave, first, &mut distances);
+                for (sum, d) in dst.chunks_mut(8).zip(distances.chunks(8)) {
+                    let f: [f32x8; N] =
+                        std::array::from_fn(|k| f32x8::from(std::array::from_fn(|j| d[j.min(d.len() - 1)][k])));
+                    let v = self.combination.value(&f).to_array();
+                    for (s, v) in sum.iter_mut().zip(v) {
+                        // As value8: the first octave, then sum + amplitude · v.
+                        *s = if i == 0 { v } else { *s + amplitude * v };
+                    }
+                }
+            }
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            let rows = crate::simd::BAND;
+            out.par_chunks_mut(rows * width).enumerate().for_each(|(b, dst)| band(b * rows, dst));
+        }
+        #[cfg(not(feature = "parallel"))]
+        {
+            let rows = crate::simd::SERIAL_BAND;
+            out.chunks_mut(rows * width).enumerate().for_each(|(b, dst)| band(b * rows, dst));
+        }
+        Ok(())
+    }
+
+    /// Octave i of `grid` as a grid of its own (origin and step times the
+    /// octave's frequency), where that gives the octave's coordinates bit
+    /// for bit: no period, every frequency a power of two, and nothing
+    /// scaled near overflow (NaN and infinite grids fail the test too).
+    fn octave_grids(&self, grid: &crate::Grid<D>) -> Option<Vec<crate::Grid<D>>> {
+        let power_of_two = |f: f64| f.is_normal() && f > 0.0 && f.to_bits() & ((1u64 << 52) - 1) == 0;
+        // The largest magnitude any point's coordinate or partial sum takes.
+        let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
+        let suits =
+            self.period.is_none() && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300);
+        suits.then(|| {
+            self.octaves
+                .iter()
+                .map(|&(f, _, _)| crate::Grid {
+                    origin: grid.origin.map(|o| o * f),
+                    step: grid.step.map(|s| s * f),
+                    size: grid.size,
+                })
+                .collect()
+        })
     }
 
     /// The range of values over `samples` random points (uniform in

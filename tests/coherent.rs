@@ -1,15 +1,21 @@
 //! The coherent grid path: the per-sample kernel's bits at every sample of
 //! every grid, whatever the configuration, and ties ordered by ID on both
-//! paths.
+//! paths; a texture's grid values, whose octaves take the same path, the
+//! bits of its value at each point.
 
 use worley::{Config, Features32, Grid, Metric, Mode, Outputs, Simd};
-use worley_harness::grids::{grid_identity, same_bits};
+use worley_harness::grids::{grid_identity, same_bits, texture_identity};
 
 fn identical<const D: usize, const N: usize>(config: Config, grids: usize, range: f64) {
+    // A texture's octaves on the same grids, through values_grid.
+    let (samples, differing) = texture_identity::<D, N>(Config { order: N, ..config }, 5, grids, range);
+    assert_eq!(differing, 0, "texture {D}D F{N} {config:?}: {differing} of {samples}");
+    assert!(samples > grids * 20, "{samples}");
     for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
         let simd = Simd::<D, N>::new(Config { order: N, ..config }, outputs).unwrap();
         let found = grid_identity(&simd, 5, grids, range);
         assert_eq!(found.differing, 0, "{D}D F{N} {config:?} {outputs:?}: {found:?}");
+
         // Every grid of the campaign suits the coherent path in exact mode.
         let expected = if config.mode == Mode::Exact { grids } else { 0 };
         assert_eq!(found.coherent, expected, "{D}D F{N} {config:?} {outputs:?}: {found:?}");

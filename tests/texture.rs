@@ -5,7 +5,7 @@
 
 use worley::definition::FRACTION_ULP;
 use worley::texture::{bump, Combination, Fractal, Texture, TextureError};
-use worley::{Config, Metric, Outputs, Period, Simd};
+use worley::{Config, Grid, Metric, Outputs, Period, Simd};
 use worley_harness::uniform;
 
 /// Brute force over the periodic point set: every point of every cell of
@@ -357,4 +357,50 @@ fn combinations_parse_from_their_written_form() {
     for bad in ["", "G1", "F0", "F17", "xF1", "F1+", "2"] {
         assert!(bad.parse::<Combination>().is_err(), "{bad:?} must be rejected");
     }
+}
+
+/// `values_grid` against `value` at every point of `grid`, bit for bit.
+fn grid_matches_points<const D: usize, const N: usize>(t: &Texture<D, N>, grid: &Grid<D>) {
+    let mut image = vec![0.0; grid.len().unwrap()];
+    t.values_grid(grid, &mut image).unwrap();
+    for (i, v) in image.iter().enumerate() {
+        let want = t.value(grid.point(i));
+        assert_eq!(v.to_bits(), want.to_bits(), "sample {i} at {:?}: {v} vs {want}", grid.point(i));
+    }
+}
+
+#[test]
+fn texture_grids_give_each_points_value_on_every_path() {
+    let c = Config::default();
+    let fbm = Fractal::octaves(4);
+    // Lacunarity 2: every octave a grid of its own; the first octaves on
+    // the coherent path, the last (a step of 0.9 cells) per sample. More
+    // than one band of rows, a width that is no multiple of eight, an
+    // origin on a lattice plane and a negative step.
+    let t = Texture::<2, 1>::new(c, Combination::f(1), fbm, None).unwrap();
+    let grid = Grid { origin: [-3.0, 7.25], step: [0.1125, -0.07], size: [45, 300] };
+    let scale = t.kernel().pattern().scale();
+    let octave = |f: f64| Grid { origin: grid.origin.map(|o| o * f), step: grid.step.map(|s| s * f), size: grid.size };
+    assert!(t.kernel().coherent_grid(&octave(1.0)) && !t.kernel().coherent_grid(&octave(8.0)), "scale {scale}");
+    grid_matches_points(&t, &grid);
+    // Combinations of several distances, other metrics, 3D and 4D.
+    let crackle = Texture::<3, 2>::new(c, Combination::crackle(), Fractal::octaves(3), None).unwrap();
+    grid_matches_points(&crackle, &Grid { origin: [0.3, -1.7, 2.5], step: [0.04, 0.05, 0.3], size: [37, 21, 3] });
+    let product = Config { metric: Metric::Manhattan, seed: 4, ..c };
+    let t = Texture::<3, 2>::new(product, Combination::Product, Fractal::octaves(2), None).unwrap();
+    grid_matches_points(&t, &Grid { origin: [10.0, 0.0, -0.5], step: [0.03, 0.0, 0.2], size: [64, 1, 5] });
+    let t = Texture::<4, 1>::new(c, Combination::f(1), Fractal::octaves(2), None).unwrap();
+    grid_matches_points(&t, &Grid { origin: [0.5, 0.5, 0.5, 0.5], step: [0.05, 0.1, 0.2, 0.5], size: [17, 5, 3, 2] });
+    // A lacunarity that is no power of two, and a periodic texture: eight
+    // points at a time, the same values.
+    let odd = Fractal { lacunarity: 1.9, ..fbm };
+    let t = Texture::<2, 1>::new(c, Combination::f(1), odd, None).unwrap();
+    grid_matches_points(&t, &Grid { origin: [0.0, 0.0], step: [0.05, 0.05], size: [30, 20] });
+    let t = Texture::<2, 1>::new(c, Combination::f(1), fbm, Some(Period::new([4, 4]).unwrap())).unwrap();
+    grid_matches_points(&t, &Grid { origin: [0.0, 0.0], step: [0.05, 0.05], size: [30, 20] });
+    // Coordinates near the limits and NaN: the per-point results.
+    grid_matches_points(
+        &Texture::<2, 1>::new(c, Combination::f(1), fbm, None).unwrap(),
+        &Grid { origin: [1e300, f64::NAN], step: [1e299, 0.1], size: [9, 2] },
+    );
 }

@@ -7,9 +7,14 @@
 //! oracle campaign proves exact on its own. This campaign draws grids that
 //! stress the tiling: odd sizes, origins anywhere (on lattice planes too),
 //! steps from a hundredth of a cell to an eighth along axis 0, negative
-//! steps, rows a cell or more apart, and single rows.
+//! steps, rows a cell or more apart, and single rows. The same grids go
+//! through a texture's [`Texture::values_grid`], whose octaves take the
+//! coherent path as grids of their own, against [`Texture::value`] at every
+//! point, which runs the per-sample kernel octave by octave.
 
 use worley::simd::{Features32, Grid, Simd};
+use worley::texture::{Combination, Fractal, Texture};
+use worley::Config;
 
 use crate::{first_in_cell, uniform};
 
@@ -26,6 +31,12 @@ pub struct GridIdentity {
     /// or whose distances from [`Simd::evaluate_grid_distances`], differ in
     /// any bit from the per-sample kernel's.
     pub differing: usize,
+    /// Samples of the same grids through [`Texture::values_grid`] of a
+    /// three-octave sum of F_n on the same configuration
+    /// ([`texture_identity`]).
+    pub texture_samples: usize,
+    /// Of which differ in any bit from [`Texture::value`] at the point.
+    pub texture_differing: usize,
 }
 
 /// Grid `g` of a seeded campaign in a world of half-width `range` (user
@@ -65,7 +76,8 @@ pub fn campaign_grid<const D: usize>(seed: u64, g: usize, range: f64, scale: f64
 
 /// Evaluates `grids` grids of the campaign with `simd.evaluate_grid` and
 /// `simd.evaluate_grid_distances`, and compares every sample with
-/// `simd.evaluate` at the same point, bit for bit.
+/// `simd.evaluate` at the same point, bit for bit. The texture fields are
+/// left at zero: [`texture_identity`] fills them.
 pub fn grid_identity<const D: usize, const N: usize>(
     simd: &Simd<D, N>,
     seed: u64,
@@ -96,6 +108,32 @@ pub fn grid_identity<const D: usize, const N: usize>(
         }
     }
     found
+}
+
+/// The same grids through a texture of three octaves of F_n on `config`:
+/// its [`Texture::values_grid`] against its [`Texture::value`] at every
+/// point, bit for bit. Returns the samples compared and how many differ.
+pub fn texture_identity<const D: usize, const N: usize>(
+    config: Config,
+    seed: u64,
+    grids: usize,
+    range: f64,
+) -> (usize, usize) {
+    let texture = Texture::<D, N>::new(config, Combination::f(N), Fractal::octaves(3), None).expect("F_n, 3 octaves");
+    let scale = texture.kernel().pattern().scale();
+    let (mut samples, mut differing) = (0, 0);
+    let mut values = Vec::new();
+    for g in 0..grids {
+        let grid = campaign_grid::<D>(seed, g, range, scale);
+        values.clear();
+        values.resize(grid.len().expect("small grids"), 0.0);
+        texture.values_grid(&grid, &mut values).expect("the buffer fits the grid");
+        for (i, got) in values.iter().enumerate() {
+            samples += 1;
+            differing += usize::from(got.to_bits() != texture.value(grid.point(i)).to_bits());
+        }
+    }
+    (samples, differing)
 }
 
 /// Whether two results are the same bits (NaN payloads included).

@@ -119,7 +119,10 @@ impl<const D: usize, const N: usize> Kernel<D> for worley::simd::Simd<D, N> {
         4.0 * f32::EPSILON as f64 * (f + cell)
     }
     fn grid_identity(&self, seed: u64, grids: usize, range: f64) -> Option<grids::GridIdentity> {
-        Some(grids::grid_identity(self, seed, grids, range))
+        let mut found = grids::grid_identity(self, seed, grids, range);
+        (found.texture_samples, found.texture_differing) =
+            grids::texture_identity::<D, N>(*self.config(), seed, grids, range);
+        Some(found)
     }
 }
 

@@ -100,7 +100,7 @@ impl Report {
         self.orders
             .iter()
             .all(|o| o.oracle_disagreements == 0 && o.id_disagreements == 0 && o.continuity_violations == 0)
-            && self.grids.is_none_or(|g| g.differing == 0)
+            && self.grids.is_none_or(|g| g.differing == 0 && g.texture_differing == 0)
     }
 
     /// The report as pretty-printed JSON.
@@ -170,8 +170,9 @@ impl Report {
         if let Some(g) = &self.grids {
             let _ = writeln!(
                 s,
-                "  grids: {} grids ({} on the coherent path), {} samples, {} differing in any bit from the per-sample kernel",
-                g.grids, g.coherent, g.samples, g.differing
+                "  grids: {} grids ({} on the coherent path), {} samples, {} differing in any bit from the per-sample kernel; \
+                 a 3-octave texture's grid values: {} samples, {} differing from its per-point value",
+                g.grids, g.coherent, g.samples, g.differing, g.texture_samples, g.texture_differing
             );
         }
         s

@@ -75,11 +75,11 @@ use std::cell::Cell;
 
 /// Rows of a grid per band on all cores; a band's cells are generated once.
 #[cfg(feature = "parallel")]
-const BAND: usize = 64;
+pub(crate) const BAND: usize = 64;
 /// Rows per band of a serial call: twice as many share the band's margin of
 /// cells, so fewer cells are generated twice (docs/simd.md has the
 /// measurement), where the parallel call keeps more bands for more cores.
-const SERIAL_BAND: usize = 128;
+pub(crate) const SERIAL_BAND: usize = 128;
 /// Relative slack of the candidate and certificate tests.
 const SLACK_REL: f32 = 1.0 / 256.0;
 /// Absolute slack of the same tests, in lane units (2^−24 cells).
@@ -289,6 +289,15 @@ struct Axes<const D: usize> {
     sixteen: bool,
 }
 
+/// A grid located once, for a caller that combines several grids' results
+/// band by band (a texture's octaves, see [`crate::texture::Texture::values_grid`]).
+pub(crate) struct GridRows<'g, const D: usize> {
+    grid: &'g Grid<D>,
+    /// `None` where the grid does not suit the coherent path: its rows then
+    /// take the per-sample kernel.
+    axes: Option<Axes<D>>,
+}
+
 impl<const D: usize, const N: usize> Simd<D, N> {
     /// Whether [`Simd::evaluate_grid`] takes the coherent path for `grid`:
     /// [`Mode::Exact`], eight steps along axis 0 within one cell
@@ -362,6 +371,21 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let band = |(b, dst): (usize, &mut [T])| self.band(grid, &axes, b * SERIAL_BAND, dst);
         out.chunks_mut(SERIAL_BAND * width).enumerate().for_each(band);
         true
+    }
+
+    /// `grid` located once, for evaluation a band of rows at a time.
+    pub(crate) fn grid_rows<'g>(&self, grid: &'g Grid<D>) -> GridRows<'g, D> {
+        GridRows { grid, axes: self.grid_axes(grid) }
+    }
+
+    /// The distances of rows `first..` of the grid into `out` (whole rows),
+    /// the bits [`Simd::evaluate_grid_distances`] writes for them.
+    pub(crate) fn grid_rows_distances(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [[f32; N]]) {
+        match &rows.axes {
+            _ if out.is_empty() => {}
+            Some(axes) => self.band(rows.grid, axes, first, out),
+            None => GridSample::per_sample(self, rows.grid, first * rows.grid.size[0], out),
+        }
     }
 
     /// Rows `first..` of the grid into `out` (whole rows).

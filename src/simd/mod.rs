@@ -117,6 +117,11 @@ pub mod lanes;
 pub mod periodic;
 
 pub use batch::{Grid, Point, SizeError, TILE};
+pub(crate) use coherent::GridRows;
+#[cfg(feature = "parallel")]
+pub(crate) use coherent::BAND;
+#[cfg(not(feature = "parallel"))]
+pub(crate) use coherent::SERIAL_BAND;
 pub use periodic::{Period, PeriodError, MAX_PERIOD};
 
 use wide::{f32x8, u32x8};
