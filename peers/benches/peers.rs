@@ -229,6 +229,12 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let mut slice_out = vec![Features32::<3, 1> { distance: [0.0; 1], delta: [[0.0; 3]; 1], id: [0; 1] }; random.len()];
     let mut slice_out2 =
         vec![Features32::<3, 2> { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] }; random.len()];
+    // 2D and 4D: the same slice's points, the other axes at 0.5.
+    let f1_2d = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    let f1_4d = Simd::<4, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    let spec_2d = Grid { origin: [0.0, 0.0], step: [STEP, STEP], size: [SIDE, SIDE] };
+    let spec_4d = Grid { origin: [0.0, 0.0, 0.5, 0.5], step: [STEP, STEP, 1.0, 1.0], size: [SIDE, SIDE, 1, 1] };
+    let (mut o1_2d, mut o1_4d) = (vec![[0f32; 1]; n], vec![[0f32; 1]; n]);
     let mut entries: Vec<Entry> = Vec::new();
     fn add<'a>(
         entries: &mut Vec<Entry<'a>>,
@@ -329,6 +335,20 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     );
     add(
         &mut entries,
+        "worley evaluate_grid_distances F1",
+        "2D grid F1",
+        n,
+        Box::new(|| f1_2d.evaluate_grid_distances(&spec_2d, &mut o1_2d).unwrap()),
+    );
+    add(
+        &mut entries,
+        "worley evaluate_grid_distances F1",
+        "4D grid F1",
+        n,
+        Box::new(|| f1_4d.evaluate_grid_distances(&spec_4d, &mut o1_4d).unwrap()),
+    );
+    add(
+        &mut entries,
         "worley evaluate_slice F1",
         "random F1",
         random.len(),
@@ -363,7 +383,10 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let medians: Vec<(&str, &str, f64)> = entries.iter_mut().map(|e| (e.name, e.case, median(&mut e.rates))).collect();
     let of = |name: &str, case: &str| medians.iter().find(|m| m.0 == name && m.1 == case).map(|m| m.2);
     println!();
-    println!("3D, one thread, same points at the same feature density; median M samples/s of 15 round-robin rounds after 3 unmeasured");
+    println!(
+        "3D unless the case says 2D or 4D, one thread, same points at the same feature density; \
+         median M samples/s of 15 round-robin rounds after 3 unmeasured"
+    );
     println!(
         "build: RUSTFLAGS={:?}; compiled with avx2: {}, fma: {}, avx512f: {}; worley runs: {}",
         std::env::var("RUSTFLAGS").unwrap_or_default(),
@@ -375,7 +398,12 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     println!("| case | contestant | M samples/s | / quick-noise F1 | / simdnoise |");
     println!("|---|---|---|---|---|");
     for (name, case, rate) in &medians {
-        let quick_ref = of("quick-noise 0.3 F1", if case.starts_with("random") { "random F1" } else { "grid F1" });
+        // The peers run in 3D only: the 2D and 4D rows have no ratio.
+        let quick_ref = match case.split_whitespace().next() {
+            Some("random") => of("quick-noise 0.3 F1", "random F1"),
+            Some("grid") => of("quick-noise 0.3 F1", "grid F1"),
+            _ => None,
+        };
         let simd_ref = match *case {
             "grid F1" => of("simdnoise 3.1 F1", "grid F1"),
             "grid F2−F1" => of("simdnoise 3.1 F2−F1", "grid F2−F1"),
