@@ -904,13 +904,20 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             }
             for (k, b) in best.iter_mut().enumerate() {
                 let rank = metric.fold::<L>(L::f(spilled.0[k].get()), first);
+                if skip::<L, D, N, IDS, DELTAS>(rank, b) {
+                    continue;
+                }
                 let delta = if DELTAS { delta(k) } else { [L::f(0.0); D] };
                 b.insert::<IDS, DELTAS>(rank, delta, id);
             }
         } else {
             for (k, b) in best.iter_mut().enumerate() {
                 let delta = delta(k);
-                b.insert::<IDS, DELTAS>(metric.rank::<L, D>(&delta), delta, id);
+                let rank = metric.rank::<L, D>(&delta);
+                if skip::<L, D, N, IDS, DELTAS>(rank, b) {
+                    continue;
+                }
+                b.insert::<IDS, DELTAS>(rank, delta, id);
             }
         }
     }
@@ -1089,6 +1096,20 @@ impl<const D: usize, const N: usize> GridSample<D, N> for [f32; N] {
             }
         }
     }
+}
+
+/// Whether inserting a candidate of rank `rank` into `b` would change no
+/// lane, tested only where the insertion carries IDs or deltas: a lane
+/// takes it only if its rank is at most the lane's F_n (equal ranks are
+/// ordered by ID), and a NaN on either side fails both tests. The
+/// distances alone insert by a minimum and a maximum, cheaper than the
+/// branch.
+#[inline(always)]
+fn skip<L: Lanes, const D: usize, const N: usize, const IDS: bool, const DELTAS: bool>(
+    rank: L::F,
+    b: &Best<L, D, N>,
+) -> bool {
+    (IDS || DELTAS) && L::bits(L::le(rank, b.rank[N - 1])) == 0
 }
 
 /// Up to [`Lanes::N`] lanes of a finished result into `dst`. Without `IDS`
