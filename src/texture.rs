@@ -565,13 +565,15 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// Octave i of `grid` as a grid of its own (origin and step times the
     /// octave's frequency), where that gives the octave's coordinates bit
     /// for bit: no period, every frequency a power of two, and nothing
-    /// scaled near overflow (NaN and infinite grids fail the test too).
+    /// scaled near overflow, no NaN or infinite origin or step.
     fn octave_grids(&self, grid: &crate::Grid<D>) -> Option<Vec<crate::Grid<D>>> {
         let power_of_two = |f: f64| f.is_normal() && f > 0.0 && f.to_bits() & ((1u64 << 52) - 1) == 0;
         // The largest magnitude any point's coordinate or partial sum takes.
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
-        let suits =
-            self.period.is_none() && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300);
+        let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
+        let suits = finite
+            && self.period.is_none()
+            && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300);
         suits.then(|| {
             self.octaves
                 .iter()
