@@ -1,6 +1,6 @@
 //! The checks behind the fuzz targets in `fuzz/`, kept in the library so
 //! that the inputs the fuzzers found interesting replay as ordinary tests on
-//! stable (`tests/fuzz_regressions.rs`). Each check decodes arbitrary bytes
+//! stable (`tests/suite/fuzz_regressions.rs`). Each check decodes arbitrary bytes
 //! into an input and panics, with a message saying what broke, if the kernels
 //! break a documented promise. Short inputs are padded with zeros, so every
 //! byte string is a valid input.

@@ -50,7 +50,7 @@ use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
 /// Sixteen lanes in one AVX-512 register each, masks in a mask register.
 /// Every operation is the IEEE operation [`One`](super::lanes::One) does,
 /// lane by lane, so a lane's bits are the one-lane kernel's (tested against
-/// it in `tests` below and through `evaluate_slice` in `tests/simd.rs`).
+/// it in `tests` below and through `evaluate_slice` in `tests/suite/simd.rs`).
 #[derive(Clone, Copy, Debug)]
 struct Avx512;
 

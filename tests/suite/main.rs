@@ -1,0 +1,19 @@
+//! The kernel crate's integration tests, one module per subject, built as
+//! one test binary: every test reaches the kernel through its generic entry
+//! points, and one binary compiles each instantiation (dimension, order,
+//! metric, outputs, lanes) once, where a binary per file compiled it again
+//! in each file that used it. Filter by module: `cargo test --test suite
+//! simd::`.
+
+mod cell_hash;
+mod coherent;
+mod fuzz_regressions;
+mod hard_cases;
+mod minkowski;
+mod oracle;
+mod perlin;
+mod properties;
+mod sentinel_id;
+mod simd;
+mod statistics;
+mod texture;
