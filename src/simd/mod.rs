@@ -333,12 +333,29 @@ const UNIT: f32 = (1u32 << FRACTION_BITS) as f32;
 /// its coordinate states.
 #[derive(Clone, Copy, Debug)]
 struct PointConstants<const D: usize> {
-    /// Sorted tables: the point exists where the top byte exceeds this.
-    threshold: f32,
-    /// j as f32, compared with per-lane counts of unsorted tables.
-    index: f32,
     id: (u32, u32),
     coordinate: [(u32, u32); D],
+    /// The same constants repeated in every lane, read by the per-sample
+    /// kernel as whole lane sets: a load folds into the instruction that
+    /// uses it, where a scalar constant needs a broadcast of its own.
+    wide: WideConstants<D>,
+}
+
+/// One value in every lane of the widest lane set.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Splat<T>([T; WIDEST]);
+
+/// [`PointConstants`] in every lane (see its `wide`).
+#[derive(Clone, Copy, Debug)]
+struct WideConstants<const D: usize> {
+    /// What [`Simd::population`] is compared with: for a sorted table the
+    /// threshold the state's top byte must exceed for the point to exist,
+    /// for an unsorted one the point's index j, which the cell's
+    /// population must exceed.
+    key: Splat<f32>,
+    id: (Splat<u32>, Splat<u32>),
+    coordinate: [(Splat<u32>, Splat<u32>); D],
 }
 
 /// 1.5·2^52: adding and subtracting it rounds an f64 below 2^51 in magnitude
@@ -374,13 +391,17 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let points = (0..most)
             .map(|j| {
                 let base = 1 + j * (D as u32 + 1);
+                // In a sorted table, point j exists where the state's top
+                // byte reaches the first entry above j.
+                let threshold = table.iter().position(|&n| u32::from(n) > j).map_or(f32::INFINITY, |b| b as f32 - 0.5);
+                let id = lcg_jump(base);
+                let coordinate: [(u32, u32); D] = std::array::from_fn(|a| lcg_jump(base + 1 + a as u32));
+                let splat = |(m, c): (u32, u32)| (Splat([m; WIDEST]), Splat([c; WIDEST]));
+                let key = if sorted { threshold } else { j as f32 };
                 PointConstants {
-                    // In a sorted table, point j exists where the state's top
-                    // byte reaches the first entry above j.
-                    threshold: table.iter().position(|&n| u32::from(n) > j).map_or(f32::INFINITY, |b| b as f32 - 0.5),
-                    index: j as f32,
-                    id: lcg_jump(base),
-                    coordinate: std::array::from_fn(|a| lcg_jump(base + 1 + a as u32)),
+                    id,
+                    coordinate,
+                    wide: WideConstants { key: Splat([key; WIDEST]), id: splat(id), coordinate: coordinate.map(splat) },
                 }
             })
             .collect();
@@ -691,11 +712,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if STAGE != REST {
             let cells = 1usize << D;
             let pick = |c: usize, a: usize| 1 - ((c >> a) & 1);
-            let mut h = [L::u(0); 16];
+            let h = self.block_hashes::<L>(&terms);
             let mut top = [L::f(0.0); 16];
             let mut most = L::f(-1.0);
             for c in 0..cells {
-                h[c] = self.hash::<L>(per_axis(|a| terms[a][pick(c, a)]));
                 top[c] = self.population::<L>(h[c]);
                 most = L::max(most, top[c]);
             }
@@ -810,6 +830,38 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         fmix32::<L>(L::u_xor(h, L::u(keys.finish)))
     }
 
+    /// The hashes of the lanes' 2^d blocks: [`Simd::hash`] of cell c, which
+    /// takes on axis a the near neighbour's word (`terms[a][0]`) where bit a
+    /// of c is set and the own column's (`terms[a][1]`) where it is clear.
+    /// The chain's round for axis a reads the words of axes 0..=a only, so
+    /// the 2^d chains share their first rounds as a tree: 2 + 4 + … + 2^d
+    /// rounds instead of d·2^d, and the sum of the words added after the
+    /// rounds (a sum modulo 2^32, so in any order) is shared the same way.
+    #[inline(always)]
+    fn block_hashes<L: Lanes>(&self, terms: &[[L::U; 3]; D]) -> [L::U; 16] {
+        let keys = self.pattern.keys();
+        let mut h = [L::u(keys.init); 16];
+        let mut sum = [L::u(0); 16];
+        for (a, words) in terms.iter().enumerate() {
+            // Cells below 2^a hold the chains over axes 0..a; each splits in
+            // two on axis a, its own column (bit a clear) and the near one.
+            for c in 0..1usize << a {
+                let (base, s) = (h[c], sum[c]);
+                for near in 0..2 {
+                    let t = words[1 - near];
+                    let x = L::u_mul(L::u_xor(base, t), L::u(AXIS_MUL[a]));
+                    let at = c | near << a;
+                    h[at] = L::u_xor(x, L::u_shr16(x));
+                    sum[at] = if a + 1 < D { L::u_add(s, t) } else { s };
+                }
+            }
+        }
+        for c in 0..1usize << D {
+            h[c] = fmix32::<L>(L::u_xor(L::u_add(h[c], sum[c]), L::u(keys.finish)));
+        }
+        h
+    }
+
     /// Visits one cell for the lanes in `needs`: `h` is its hash, `shifted`
     /// the sample minus the cell's corner, per lane.
     #[inline(always)]
@@ -852,7 +904,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// its threshold, or its index for an unsorted table.
     #[inline(always)]
     fn key<L: Lanes>(&self, p: &PointConstants<D>) -> L::F {
-        L::f(if self.sorted { p.threshold } else { p.index })
+        L::f_load(&p.wide.key.0)
     }
 
     /// Point `p` of the cell with hash `h` (`shifted` is the sample minus
@@ -872,17 +924,17 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // stayed an out-of-line call without its instructions (`per_axis`).
         let mut delta = shifted;
         for (a, d) in delta.iter_mut().enumerate() {
-            let (am, cm) = p.coordinate[a];
-            let s = L::u_add(L::u_mul(h, L::u(am)), L::u(cm));
+            let (am, cm) = &p.wide.coordinate[a];
+            let s = L::u_add(L::u_mul(h, L::u_load(&am.0)), L::u_load(&cm.0));
             *d = L::sub(*d, L::u24_to_f(L::u_shr8(s)));
         }
         let rank = L::select(active, metric.rank::<L, D>(&delta), L::f(f32::INFINITY));
         let id = if IDS {
-            let (am, cm) = p.id;
+            let (am, cm) = &p.wide.id;
             // The sentinel state is reported as INVALID_ID − 1
             // (`definition::feature_id`): an unsigned minimum. Lanes
             // without the point carry INVALID_ID, which loses every tie.
-            let id = L::u_min(L::u_add(L::u_mul(h, L::u(am)), L::u(cm)), L::u(INVALID_ID - 1));
+            let id = L::u_min(L::u_add(L::u_mul(h, L::u_load(&am.0)), L::u_load(&cm.0)), L::u(INVALID_ID - 1));
             L::select_u(active, id, L::u(INVALID_ID))
         } else {
             L::u(0)
