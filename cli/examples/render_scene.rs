@@ -3,7 +3,7 @@
 //! of eight hits, on all cores.
 //!
 //! ```sh
-//! cargo run --release --example render_scene -- [WIDTH HEIGHT] [out/scene.png]
+//! cargo run --release -p worley-cli --example render_scene -- [WIDTH HEIGHT] [out/scene.png]
 //! ```
 
 use std::time::Instant;
