@@ -818,16 +818,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// from the cell's axis words.
     #[inline(always)]
     fn hash<L: Lanes>(&self, words: [L::U; D]) -> L::U {
-        let keys = self.pattern.keys();
-        let mut h = L::u(keys.init);
-        for (t, m) in words.iter().zip(AXIS_MUL) {
-            h = L::u_mul(L::u_xor(h, *t), L::u(m));
-            h = L::u_xor(h, L::u_shr16(h));
+        let mut h = L::u(self.pattern.keys().init);
+        for (a, t) in words.iter().enumerate() {
+            h = axis_round::<L>(h, *t, a);
         }
+        let mut sum = L::u(0);
         for w in &words[..D - 1] {
-            h = L::u_add(h, *w);
+            sum = L::u_add(sum, *w);
         }
-        fmix32::<L>(L::u_xor(h, L::u(keys.finish)))
+        self.hash_finish::<L>(h, sum)
+    }
+
+    /// The hash's last step, from the chain `h` after its axis rounds and
+    /// the sum of the words of axes 0..d − 1: the sum added (modulo 2^32,
+    /// so the same in any order), the finishing key, MurmurHash3's mix.
+    #[inline(always)]
+    fn hash_finish<L: Lanes>(&self, h: L::U, sum: L::U) -> L::U {
+        fmix32::<L>(L::u_xor(L::u_add(h, sum), L::u(self.pattern.keys().finish)))
     }
 
     /// The hashes of the lanes' 2^d blocks: [`Simd::hash`] of cell c, which
@@ -839,8 +846,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// rounds (a sum modulo 2^32, so in any order) is shared the same way.
     #[inline(always)]
     fn block_hashes<L: Lanes>(&self, terms: &[[L::U; 3]; D]) -> [L::U; 16] {
-        let keys = self.pattern.keys();
-        let mut h = [L::u(keys.init); 16];
+        let mut h = [L::u(self.pattern.keys().init); 16];
         let mut sum = [L::u(0); 16];
         for (a, words) in terms.iter().enumerate() {
             // Cells below 2^a hold the chains over axes 0..a; each splits in
@@ -849,15 +855,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 let (base, s) = (h[c], sum[c]);
                 for near in 0..2 {
                     let t = words[1 - near];
-                    let x = L::u_mul(L::u_xor(base, t), L::u(AXIS_MUL[a]));
                     let at = c | near << a;
-                    h[at] = L::u_xor(x, L::u_shr16(x));
+                    h[at] = axis_round::<L>(base, t, a);
                     sum[at] = if a + 1 < D { L::u_add(s, t) } else { s };
                 }
             }
         }
         for c in 0..1usize << D {
-            h[c] = fmix32::<L>(L::u_xor(L::u_add(h[c], sum[c]), L::u(keys.finish)));
+            h[c] = self.hash_finish::<L>(h[c], sum[c]);
         }
         h
     }
@@ -981,6 +986,14 @@ fn words<L: Lanes>(axis: usize, cell: &[i64; WIDEST], offset: i64, period: Optio
         });
     }
     word::<L>(axis, L::u_load(&t[..L::N]))
+}
+
+/// One axis round of the cell hash's chain in lanes: the axis word `t`
+/// enters, axis `axis`'s multiplier, a shift-xor.
+#[inline(always)]
+fn axis_round<L: Lanes>(h: L::U, t: L::U, axis: usize) -> L::U {
+    let x = L::u_mul(L::u_xor(h, t), L::u(AXIS_MUL[axis]));
+    L::u_xor(x, L::u_shr16(x))
 }
 
 /// MurmurHash3's finaliser in lanes ([`definition::fmix32`](crate::definition::fmix32)).
