@@ -71,16 +71,16 @@
 //!   until no unvisited cell can hold a closer point, so F_k is the true
 //!   k-th distance of the point set for every order, metric and dimension
 //!   (`tests/suite/oracle.rs`: 0 wrong on 10^6 random points per dimension against
-//!   brute force; `tests/suite/simd.rs` and the fuzz targets for continuity).
+//!   brute force; `tests/lanes/simd.rs` and the fuzz targets for continuity).
 //!   [`Mode::Window`] is Worley's 3^d search, faster and sometimes wrong.
 //! - **Error bound**: the f64 reference is within a few ulps; the f32
 //!   kernel within 4·ε_f32·(F + 1/S) of it (S = [`Pattern::scale`]), however
 //!   far the sample is from the origin, for every Minkowski exponent
-//!   (`tests/suite/simd.rs`, `tests/suite/hard_cases.rs`, `tests/suite/minkowski.rs`, the
+//!   (`tests/lanes/simd.rs`, `tests/lanes/hard_cases.rs`, `tests/suite/minkowski.rs`, the
 //!   `differential` fuzz target).
 //! - **Bit identity**: one point gives the same bits through every entry
 //!   point, lane, batch and thread count, and in a default and an AVX2
-//!   build (`tests/suite/simd.rs`, run by CI in both builds; a unit test holds the
+//!   build (`tests/lanes/simd.rs`, run by CI in both builds; a unit test holds the
 //!   runtime-AVX2 copy equal to the SSE2 code).
 //! - **Bad input** (NaN, ±∞, |x·S| > 2^53) gives NaN distances and deltas
 //!   and [`INVALID_ID`], never a panic; no real feature point carries

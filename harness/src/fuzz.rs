@@ -4,6 +4,11 @@
 //! into an input and panics, with a message saying what broke, if the kernels
 //! break a documented promise. Short inputs are padded with zeros, so every
 //! byte string is a valid input.
+//!
+//! The four entry points are `#[inline]`: the crate that calls one (a fuzz
+//! target, the regression test) compiles it and the kernels it instantiates,
+//! so that building the harness alone, as every test build of the kernel
+//! crate does, does not compile a dozen kernels that nothing there calls.
 
 use worley::config::{Config, Metric, Mode, MAX_ORDER};
 use worley::definition::{INVALID_ID, MAX_CELL_COORD};
@@ -76,6 +81,7 @@ fn same_bits<const D: usize, const N: usize>(a: &Features32<D, N>, b: &Features3
 /// single-point call must be bit-identical; both must agree with the f64
 /// reference within the stated bound, with the same IDs except at ties
 /// within that bound, and be invalid exactly where the reference is.
+#[inline]
 pub fn differential(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
     let dim = 2 + b.byte() % 3;
@@ -142,6 +148,7 @@ fn compare<const D: usize, const N: usize>(got: &Features32<D, N>, want: &Featur
 /// one a small step across it. In exact mode every F_k is 1-Lipschitz in its
 /// metric, so |F_k(a) − F_k(b)| may not exceed the metric distance from a to
 /// b, plus the rounding bounds, in the reference and in the SIMD kernel.
+#[inline]
 pub fn continuity(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
     let config = Config { seed: b.u64(), order: 4, metric: b.metric(), ..Config::default() };
@@ -180,6 +187,7 @@ pub fn continuity(data: &[u8]) {
 /// huge values) through every public entry point. No panic; a sample the
 /// reference cannot locate gives the documented invalid result everywhere;
 /// any other gives sorted distances, finite in exact mode.
+#[inline]
 pub fn bad_input(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
     let config = Config { seed: b.u64(), order: 2, metric: b.metric(), ..Config::default() };
@@ -228,6 +236,7 @@ pub fn bad_input(data: &[u8]) {
 /// Configurations: arbitrary field values, and metric names as typed on the
 /// command line. Building either gives an evaluator for a configuration
 /// `validate` accepts, or the error it reports; never a panic.
+#[inline]
 pub fn config(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
     let config = Config {

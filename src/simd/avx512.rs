@@ -9,7 +9,7 @@
 //! enabled, so it runs the instructions an AVX-512 build runs.
 //!
 //! Another way was measured first, 3D F1 on random points in the default
-//! build (`examples/throughput.rs`): plain `[f32; 16]` arrays with
+//! build (`benches/throughput.rs`): plain `[f32; 16]` arrays with
 //! lane-by-lane loops left to the compiler's vectoriser ran 3.2-5.4 M
 //! samples/s against 9.7 for the default build's eight AVX2 lanes and 24
 //! for the AVX-512 build, because the vectoriser took the loop over a
@@ -50,7 +50,7 @@ use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
 /// Sixteen lanes in one AVX-512 register each, masks in a mask register.
 /// Every operation is the IEEE operation [`One`](super::lanes::One) does,
 /// lane by lane, so a lane's bits are the one-lane kernel's (tested against
-/// it in `tests` below and through `evaluate_slice` in `tests/suite/simd.rs`).
+/// it in `tests` below and through `evaluate_slice` in `tests/lanes/simd.rs`).
 #[derive(Clone, Copy, Debug)]
 struct Avx512;
 

@@ -3,17 +3,15 @@
 //! points, and one binary compiles each instantiation (dimension, order,
 //! metric, outputs, lanes) once, where a binary per file compiled it again
 //! in each file that used it. Filter by module: `cargo test --test suite
-//! simd::`.
+//! oracle::`. The SIMD kernel's entry points and lanes, which CI tests
+//! again in each SIMD build, are the `lanes` binary (`tests/lanes/`).
 
 mod cell_hash;
-mod coherent;
 mod fuzz_regressions;
-mod hard_cases;
 mod minkowski;
 mod oracle;
 mod perlin;
 mod properties;
 mod sentinel_id;
-mod simd;
 mod statistics;
 mod texture;
