@@ -249,6 +249,9 @@ pub enum ConfigError {
         /// The evaluator's compile-time order.
         compiled: usize,
     },
+    /// The distance to the cell's border was asked under a metric other
+    /// than the Euclidean one, whose bisectors are not planes.
+    BorderMetric(Metric),
 }
 
 impl fmt::Display for ConfigError {
@@ -271,6 +274,10 @@ impl fmt::Display for ConfigError {
             ConfigError::OrderMismatch { asked, compiled } => {
                 write!(f, "order {asked} asked of an evaluator compiled for order {compiled}: use order {compiled}")
             }
+            ConfigError::BorderMetric(m) => write!(
+                f,
+                "the distance to the cell border is defined for the Euclidean metric only, not {m}: its bisectors are not planes"
+            ),
         }
     }
 }

@@ -121,7 +121,7 @@ pub mod texture;
 
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
-pub use reference::{Features, Reference};
+pub use reference::{Border, Features, Reference};
 pub use simd::{simd_level, Features32, Features8, Grid, Outputs, Period, PeriodError, Point, Simd, SizeError};
 
 // The README's and the documentation pages' Rust blocks run as doc tests.

@@ -46,6 +46,9 @@
 use crate::config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 use crate::definition::{Pattern, INVALID_ID, MAX_CELL_COORD};
 
+pub mod border;
+pub use border::Border;
+
 /// The largest Chebyshev radius of cells an exact search visits.
 pub const MAX_SHELLS: u32 = 16;
 
@@ -162,12 +165,18 @@ impl<const D: usize> Reference<D> {
     /// ```
     pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f64; D]) -> Features<D> {
         let order = self.config.order;
-        let metric = self.config.metric;
-        let limit = MAX_CELL_COORD as u64;
-        if !(fraction.iter().all(|f| (0.0..=1.0).contains(f)) && cell.iter().all(|c| c.unsigned_abs() <= limit)) {
+        if !valid_in_cell(&cell, &fraction) {
             return Features::invalid(order);
         }
-        let f = fraction;
+        let (best, r, gave_up) = self.search(cell, fraction, order);
+        best.finish(self.config.metric, self.pattern.scale(), r, gave_up)
+    }
+
+    /// The search of steps 2 and 3 for the `order` closest points, in cell
+    /// units: the list, the Chebyshev radius covered, and whether the exact
+    /// search gave up at [`MAX_SHELLS`].
+    fn search(&self, cell: [i64; D], f: [f64; D], order: usize) -> (Nearest<D>, u32, bool) {
+        let metric = self.config.metric;
         let mut best = Nearest::<D>::new(order);
         let visit = |offset: [i64; D], best: &mut Nearest<D>| {
             if metric.rank(&gaps(&f, &offset)) > best.worst() {
@@ -176,8 +185,10 @@ impl<const D: usize> Reference<D> {
             let neighbour = std::array::from_fn(|a| cell[a] + offset[a]);
             self.pattern.for_each_point(neighbour, |p| {
                 let o = p.offset();
-                let delta: [f64; D] = std::array::from_fn(|a| f[a] - (offset[a] as f64 + o[a]));
-                best.insert(metric.rank(&delta), delta, p.id);
+                // Exact: a small integer plus a 24-bit fraction.
+                let point: [f64; D] = std::array::from_fn(|a| offset[a] as f64 + o[a]);
+                let delta: [f64; D] = std::array::from_fn(|a| f[a] - point[a]);
+                best.insert(metric.rank(&delta), delta, p.id, point);
             });
         };
 
@@ -189,7 +200,7 @@ impl<const D: usize> Reference<D> {
         if self.config.mode == Mode::Exact {
             while best.worst() >= metric.rank_of_distance(outside_distance(&f, r)) {
                 if r == MAX_SHELLS {
-                    return best.finish(metric, self.pattern.scale(), r, true);
+                    return (best, r, true);
                 }
                 r += 1;
                 for offset in shell(r) {
@@ -197,8 +208,15 @@ impl<const D: usize> Reference<D> {
                 }
             }
         }
-        best.finish(metric, self.pattern.scale(), r, false)
+        (best, r, false)
     }
+}
+
+/// Whether a cell and fraction are within the documented domain: every
+/// fraction in [0, 1] (not NaN), every cell within ±[`MAX_CELL_COORD`].
+fn valid_in_cell<const D: usize>(cell: &[i64; D], fraction: &[f64; D]) -> bool {
+    let limit = MAX_CELL_COORD as u64;
+    fraction.iter().all(|f| (0.0..=1.0).contains(f)) && cell.iter().all(|c| c.unsigned_abs() <= limit)
 }
 
 /// Per-axis gaps between the sample (fraction `f` of the centre cell) and the
@@ -249,6 +267,8 @@ struct Nearest<const D: usize> {
     rank: [f64; MAX_ORDER],
     delta: [[f64; D]; MAX_ORDER],
     id: [u32; MAX_ORDER],
+    /// Each point's position relative to the sample's cell (cell units).
+    point: [[f64; D]; MAX_ORDER],
 }
 
 impl<const D: usize> Nearest<D> {
@@ -258,6 +278,7 @@ impl<const D: usize> Nearest<D> {
             rank: [f64::INFINITY; MAX_ORDER],
             delta: [[f64::NAN; D]; MAX_ORDER],
             id: [INVALID_ID; MAX_ORDER],
+            point: [[f64::NAN; D]; MAX_ORDER],
         }
     }
 
@@ -268,7 +289,7 @@ impl<const D: usize> Nearest<D> {
     }
 
     #[inline]
-    fn insert(&mut self, rank: f64, delta: [f64; D], id: u32) {
+    fn insert(&mut self, rank: f64, delta: [f64; D], id: u32, point: [f64; D]) {
         let last = self.order - 1;
         if (rank, id) >= (self.rank[last], self.id[last]) {
             return;
@@ -278,11 +299,13 @@ impl<const D: usize> Nearest<D> {
             self.rank[i] = self.rank[i - 1];
             self.delta[i] = self.delta[i - 1];
             self.id[i] = self.id[i - 1];
+            self.point[i] = self.point[i - 1];
             i -= 1;
         }
         self.rank[i] = rank;
         self.delta[i] = delta;
         self.id[i] = id;
+        self.point[i] = point;
     }
 
     /// Converts to user units. `gave_up` marks a search that hit

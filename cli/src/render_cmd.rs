@@ -393,6 +393,14 @@ pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathB
         ),
         ("flagstones.png", Box::new(|| one(&with(&|a| a.shade = ShadeArg::Flagstones)))),
         (
+            "border_vs_crackle.png",
+            Box::new(|| {
+                let config = Config { seed: base.seed, density: base.density, ..Config::default() };
+                let tiles = render::border_and_crackle(config, &base.view(), 0.8, 0.12)?;
+                Ok(sheet(&tiles, 2, 2))
+            }),
+        ),
+        (
             "tileable_2x2.png",
             Box::new(|| {
                 let a = with(&|a| {

@@ -136,3 +136,46 @@ fn per_block<const D: usize>(
     grid.fill_by_eights(&mut pixels, shade).expect("the buffer holds one pixel per grid point");
     pixels
 }
+
+/// F2 − F1 beside twice the distance to the cell's border, on the same
+/// points (2D, the f64 reference, which is exact for both; a plane through
+/// 3D cells would cut bisector planes at a slant and widen their lines
+/// there): the top row as a colour map over [0, `range`] user units, the
+/// bottom row as mortar where each is below `mortar`. F2 − F1's lines widen
+/// where two feature points lie close together; the border's are even.
+/// Returns the four tiles in that order.
+///
+/// # Errors
+/// An invalid configuration, or an image with no pixels.
+pub fn border_and_crackle(
+    config: worley::Config,
+    view: &View,
+    range: f32,
+    mortar: f32,
+) -> Result<Vec<(Vec<f32>, Rgb)>, String> {
+    let basis = worley::Reference::<2>::new(worley::Config { order: 2, ..config }).map_err(|e| e.to_string())?;
+    let grid = view.grid::<2>();
+    let n = grid.len().filter(|&n| n > 0 && n <= 1 << 28).ok_or("the image must have 1 to 2^28 pixels")?;
+    let parts = worley_harness::chunked(n, |pixels| {
+        pixels
+            .map(|i| {
+                let x = grid.point(i);
+                let f = basis.evaluate(x);
+                let border = basis.border(x).map(|b| b.distance)?;
+                Ok([(f.distance[1] - f.distance[0]) as f32, 2.0 * border as f32])
+            })
+            .collect::<Result<Vec<[f32; 2]>, worley::ConfigError>>()
+    });
+    let mut pairs = Vec::with_capacity(n);
+    for part in parts {
+        pairs.extend(part.map_err(|e| e.to_string())?);
+    }
+    let image = |values: Vec<f32>, colour: &dyn Fn(f32) -> [u8; 3]| {
+        let pixels = values.iter().map(|&v| colour(v)).collect();
+        (values, Rgb { width: view.width, height: view.height, pixels })
+    };
+    let heat = |v: f32| ColourMap::Heat.colour((v / range).clamp(0.0, 1.0));
+    let lines = |v: f32| if v < mortar { [84, 79, 71] } else { [226, 220, 206] };
+    let column = |k: usize| pairs.iter().map(|p| p[k]).collect::<Vec<f32>>();
+    Ok(vec![image(column(0), &heat), image(column(1), &heat), image(column(0), &lines), image(column(1), &lines)])
+}

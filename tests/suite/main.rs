@@ -6,6 +6,7 @@
 //! oracle::`. The SIMD kernel's entry points and lanes, which CI tests
 //! again in each SIMD build, are the `lanes` binary (`tests/lanes/`).
 
+mod border;
 mod cell_hash;
 mod fuzz_regressions;
 mod minkowski;
