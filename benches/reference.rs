@@ -1,5 +1,7 @@
 //! Throughput of the f64 reference kernel: F1, F2 and F4 in 2D, 3D and 4D on
-//! 4096 seeded random points in [−1000, 1000]^d, and on a 64×64 grid slice.
+//! 4096 seeded random points in [−1000, 1000]^d, and on a 64×64 grid slice;
+//! and the distance to the cell's border on the same points, to set beside
+//! F2 (which F2 − F1 needs).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
@@ -34,6 +36,18 @@ fn bench_dim<const D: usize>(c: &mut Criterion) {
                 })
             });
         }
+    }
+    let basis = Reference::<D>::new(Config::default()).unwrap();
+    let mut borders = vec![0.0f64; POINTS];
+    for (name, points) in [("random", &random), ("grid", &grid)] {
+        group.bench_function(BenchmarkId::new(name, "border"), |b| {
+            b.iter(|| {
+                for (x, o) in black_box(points).iter().zip(borders.iter_mut()) {
+                    *o = basis.border(*x).map_or(f64::NAN, |b| b.distance);
+                }
+                black_box(&borders);
+            })
+        });
     }
     group.finish();
 }
