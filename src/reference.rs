@@ -182,13 +182,9 @@ impl<const D: usize> Reference<D> {
             if metric.rank(&gaps(&f, &offset)) > best.worst() {
                 return;
             }
-            let neighbour = std::array::from_fn(|a| cell[a] + offset[a]);
-            self.pattern.for_each_point(neighbour, |p| {
-                let o = p.offset();
-                // Exact: a small integer plus a 24-bit fraction.
-                let point: [f64; D] = std::array::from_fn(|a| offset[a] as f64 + o[a]);
+            self.for_each_point_at(cell, offset, |point, id| {
                 let delta: [f64; D] = std::array::from_fn(|a| f[a] - point[a]);
-                best.insert(metric.rank(&delta), delta, p.id, point);
+                best.insert(metric.rank(&delta), delta, id, point);
             });
         };
 
@@ -209,6 +205,18 @@ impl<const D: usize> Reference<D> {
             }
         }
         (best, r, false)
+    }
+
+    /// Every feature point of the cell at `offset` from `cell`: its position
+    /// relative to `cell`'s lower corner, in cell units (exact: a small
+    /// integer plus a 24-bit fraction), and its ID.
+    #[inline]
+    fn for_each_point_at(&self, cell: [i64; D], offset: [i64; D], mut visit: impl FnMut([f64; D], u32)) {
+        let neighbour = std::array::from_fn(|a| cell[a] + offset[a]);
+        self.pattern.for_each_point(neighbour, |p| {
+            let o = p.offset();
+            visit(std::array::from_fn(|a| offset[a] as f64 + o[a]), p.id);
+        });
     }
 }
 

@@ -135,10 +135,7 @@ impl<const D: usize> Reference<D> {
             if Metric::Euclidean.rank(&gaps(&f, &offset)) > reach * reach {
                 return;
             }
-            let neighbour = std::array::from_fn(|a| cell[a] + offset[a]);
-            self.pattern.for_each_point(neighbour, |p| {
-                let o = p.offset();
-                let point: [f64; D] = std::array::from_fn(|a| offset[a] as f64 + o[a]);
+            self.for_each_point_at(cell, offset, |point, id| {
                 let u: [f64; D] = std::array::from_fn(|a| point[a] - p1[a]);
                 let length = Metric::Euclidean.rank(&u).sqrt();
                 if length == 0.0 {
@@ -147,9 +144,9 @@ impl<const D: usize> Reference<D> {
                 let along: f64 = (0..D).map(|a| u[a] * (0.5 * (p1[a] + point[a]) - f[a])).sum();
                 // Ties with a later ID may round to a hair below zero.
                 let b = (along / length).max(0.0);
-                if (b, p.id) < (best.distance, best.neighbour) {
+                if (b, id) < (best.distance, best.neighbour) {
                     best.distance = b;
-                    best.neighbour = p.id;
+                    best.neighbour = id;
                     best.normal = u.map(|v| -v / length);
                 }
             });
