@@ -34,6 +34,7 @@
 //! | a huge world | [`Simd::evaluate_in_cell`], [`Simd::evaluate8_in_cell`], [`Reference::evaluate_in_cell`] | an `i64` cell plus a fraction: no precision lost far from the origin |
 //! | a tileable texture | [`Simd::evaluate_periodic`], [`Simd::evaluate8_periodic`] with a [`Period`] | samples in cells |
 //! | combinations, fractal sums, gradients | [`texture::Texture`] | F2 − F1, Σ gain^i·C(lacunarity^i·x), analytic gradients |
+//! | the distance to the cell's border (even mortar) | [`SimdBorder::border`], [`SimdBorder::border8`], `border_slice`, `border_grid`, `border_in_cell`, `border_periodic`; [`Reference::border`] | with the neighbour's ID and the border's normal; Euclidean |
 //! | Perlin noise beside it | [`perlin::Perlin`] | one point or eight |
 //!
 //! [`Outputs`] says whether IDs and deltas are computed at all: asking for
@@ -122,7 +123,10 @@ pub mod texture;
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Border, Features, Reference};
-pub use simd::{simd_level, Features32, Features8, Grid, Outputs, Period, PeriodError, Point, Simd, SizeError};
+pub use simd::{
+    simd_level, Border32, Border8, Features32, Features8, Grid, Outputs, Period, PeriodError, Point, Simd, SimdBorder,
+    SizeError,
+};
 
 // The README's and the documentation pages' Rust blocks run as doc tests.
 #[cfg(doctest)]

@@ -1,6 +1,7 @@
-//! Textures on the basis: combinations of F1..Fn, fractal sums, their
-//! analytic gradients, a periodic (tileable) domain, and normal perturbation
-//! for bump mapping, all on the 8-lane kernel.
+//! Textures on the basis: combinations of F1..Fn or the distance to the
+//! cell's border ([`Combination::Border`]), fractal sums, their analytic
+//! gradients, a periodic (tileable) domain, and normal perturbation for bump
+//! mapping, all on the 8-lane kernel.
 //!
 //! A [`Texture`] is built once from a [`Config`], a [`Combination`], a
 //! [`Fractal`] and optionally a [`Period`]; every parameter is checked
@@ -20,7 +21,7 @@
 use wide::f32x8;
 
 use crate::config::{Config, ConfigError, Metric};
-use crate::simd::{Features8, GridRows, Outputs, Period, PeriodError, Point, Simd};
+use crate::simd::{Border8, Features8, GridRows, Outputs, Period, PeriodError, Point, Simd, SimdBorder};
 
 /// How F1..Fn are combined into one value.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,6 +32,11 @@ pub enum Combination {
     Product,
     /// F3² − F2².
     SquareDifference,
+    /// The distance to the border of the sample's Voronoi cell
+    /// ([`SimdBorder`]): even lines whatever the spacing of the points,
+    /// where F2 − F1 widens between close pairs. Euclidean only; its
+    /// gradient is the border plane's normal.
+    Border,
 }
 
 impl Combination {
@@ -52,13 +58,15 @@ impl Combination {
             Combination::Linear(c) => c.len(),
             Combination::Product => 2,
             Combination::SquareDifference => 3,
+            Combination::Border => 1,
         }
     }
 
-    /// A short name, e.g. `F2-F1`, `0.5F1+2F3`, `F1*F2`.
+    /// A short name, e.g. `F2-F1`, `0.5F1+2F3`, `F1*F2`, `border`.
     pub fn name(&self) -> String {
         match self {
             Combination::Product => "F1*F2".into(),
+            Combination::Border => "border".into(),
             Combination::SquareDifference => "F3^2-F2^2".into(),
             Combination::Linear(c) => {
                 let mut s = String::new();
@@ -98,10 +106,13 @@ impl Combination {
         Ok(())
     }
 
-    /// The combination of distances, in lanes.
+    /// The combination of distances, in lanes. [`Combination::Border`] is
+    /// not a function of distances: textures evaluate it through their
+    /// [`SimdBorder`] and never call this for it (NaN if they did).
     #[inline(always)]
     fn value<const N: usize>(&self, f: &[f32x8; N]) -> f32x8 {
         match self {
+            Combination::Border => f32x8::splat(f32::NAN),
             Combination::Linear(c) => {
                 let mut v = f32x8::splat(0.0);
                 for (ck, fk) in c.iter().zip(f) {
@@ -114,10 +125,12 @@ impl Combination {
         }
     }
 
-    /// d(combination)/d(F_k) for each k, in lanes.
+    /// d(combination)/d(F_k) for each k, in lanes (none for
+    /// [`Combination::Border`], whose gradient is its plane's normal).
     fn weights<const N: usize>(&self, f: &[f32x8; N]) -> [f32x8; N] {
         let mut w = [f32x8::splat(0.0); N];
         match self {
+            Combination::Border => {}
             Combination::Linear(c) => {
                 for (wk, ck) in w.iter_mut().zip(c) {
                     *wk = f32x8::splat(*ck);
@@ -306,6 +319,8 @@ impl Range {
 pub struct Texture<const D: usize, const N: usize> {
     values: Simd<D, N>,
     deltas: Simd<D, N>,
+    /// The border kernel, for [`Combination::Border`].
+    border: Option<SimdBorder<D>>,
     combination: Combination,
     fractal: Fractal,
     period: Option<Period<D>>,
@@ -345,6 +360,10 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         fractal.validate()?;
         let values = Simd::new(config, Outputs::Distances)?;
         let deltas = Simd::new(config, Outputs::IdsAndDeltas)?;
+        let border = match combination {
+            Combination::Border => Some(SimdBorder::new(config)?),
+            _ => None,
+        };
         let mut octaves = Vec::new();
         let (mut frequency, mut amplitude) = (1.0f64, 1.0f32);
         for _ in 0..fractal.octaves {
@@ -368,7 +387,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             amplitude *= fractal.gain;
         }
         let input_scale = if period.is_some() { (1.0 / values.pattern().scale()) as f32 } else { 1.0 };
-        Ok(Texture { values, deltas, combination, fractal, period, octaves, input_scale })
+        Ok(Texture { values, deltas, border, combination, fractal, period, octaves, input_scale })
     }
 
     /// The combination.
@@ -402,8 +421,10 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     pub fn value8(&self, x: &[[f64; D]; 8]) -> f32x8 {
         let mut sum = f32x8::splat(0.0);
         for (i, &(frequency, amplitude, period)) in self.octaves.iter().enumerate() {
-            let f = self.features(&self.values, x, frequency, period);
-            let v = self.combination.value(&f.distance);
+            let v = match &self.border {
+                Some(border) => self.borders(border, x, frequency, period).distance,
+                None => self.combination.value(&self.features(&self.values, x, frequency, period).distance),
+            };
             sum = if i == 0 { v } else { sum + f32x8::splat(amplitude) * v };
         }
         sum
@@ -428,12 +449,23 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let mut gradient = [f32x8::splat(0.0); D];
         let mut defined = [true; 8];
         for (i, &(frequency, amplitude, period)) in self.octaves.iter().enumerate() {
+            // ∂/∂x of amplitude · C(frequency · x) = amplitude · frequency · ∇C.
+            let chain = f32x8::splat(amplitude * frequency as f32 * self.input_scale);
+            if let Some(border) = &self.border {
+                let b = self.borders(border, x, frequency, period);
+                value = if i == 0 { b.distance } else { value + f32x8::splat(amplitude) * b.distance };
+                for (sum, n) in gradient.iter_mut().zip(&b.normal) {
+                    *sum += chain * *n;
+                }
+                for (d, v) in defined.iter_mut().zip(b.distance.to_array()) {
+                    *d &= v.is_finite();
+                }
+                continue;
+            }
             let f = self.features(&self.deltas, x, frequency, period);
             let v = self.combination.value(&f.distance);
             value = if i == 0 { v } else { value + f32x8::splat(amplitude) * v };
             let w = self.combination.weights(&f.distance);
-            // ∂/∂x of amplitude · C(frequency · x) = amplitude · frequency · ∇C.
-            let chain = f32x8::splat(amplitude * frequency as f32 * self.input_scale);
             for ((wk, fk), dk) in w.iter().zip(&f.distance).zip(&f.delta) {
                 if wk.to_array().iter().all(|&v| v == 0.0) {
                     continue;
@@ -572,6 +604,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
         let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
         let suits = finite
+            && self.border.is_none()
             && self.period.is_none()
             && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300);
         suits.then(|| {
@@ -607,6 +640,32 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         }
         let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
         Range { lo: q(0.001), hi: q(0.999) }
+    }
+
+    /// The eight lanes' borders at `frequency · x`, as [`Texture::features`]
+    /// places the octave.
+    #[inline(always)]
+    fn borders(
+        &self,
+        border: &SimdBorder<D>,
+        x: &[[f64; D]; 8],
+        frequency: f64,
+        period: Option<Period<D>>,
+    ) -> Border8<D> {
+        match (period, self.period) {
+            (Some(p), Some(base)) => {
+                let base = base.cells().map(f64::from);
+                let y = x.map(|q| std::array::from_fn(|a| q[a].rem_euclid(base[a]) * frequency));
+                border.border8_periodic(&y, &p)
+            }
+            _ => {
+                if frequency == 1.0 {
+                    border.border8(x)
+                } else {
+                    border.border8(&x.map(|q| q.map(|v| v * frequency)))
+                }
+            }
+        }
     }
 
     /// The eight lanes' features at `frequency · x`.
@@ -703,13 +762,14 @@ pub fn bump(normal: glam::Vec3, gradient: glam::Vec3, strength: f32) -> glam::Ve
 impl std::str::FromStr for Combination {
     type Err = String;
 
-    /// `F1*F2`, `F3^2-F2^2`, or a linear sum of terms `[c]F<k>` such as
-    /// `F2-F1`, `0.5F1+2F3`, `-1.5*F2+F4` (k from 1 to 16).
+    /// `F1*F2`, `F3^2-F2^2`, `border`, or a linear sum of terms `[c]F<k>`
+    /// such as `F2-F1`, `0.5F1+2F3`, `-1.5*F2+F4` (k from 1 to 16).
     fn from_str(s: &str) -> Result<Self, String> {
         let t: String = s.chars().filter(|c| !c.is_whitespace()).collect();
-        let usage = "use F1*F2, F3^2-F2^2, or a sum of terms [c]Fk such as F2-F1 or 0.5F1+2F3";
+        let usage = "use F1*F2, F3^2-F2^2, border, or a sum of terms [c]Fk such as F2-F1 or 0.5F1+2F3";
         match t.as_str() {
             "F1*F2" => return Ok(Combination::Product),
+            "border" => return Ok(Combination::Border),
             "F3^2-F2^2" => return Ok(Combination::SquareDifference),
             "" => return Err(format!("empty combination: {usage}")),
             _ => {}

@@ -12,7 +12,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use worley::perlin::Perlin;
 use worley::texture::{bump, Combination, Fractal, Texture};
-use worley::{Config, Outputs, Simd};
+use worley::{Config, SimdBorder};
 use worley_cli::picture::{id_colour, to_byte, write_output, Rgb};
 
 /// What a ray hit.
@@ -77,10 +77,11 @@ fn sky(dir: Vec3) -> Vec3 {
 
 /// The textures, built once and shared by every thread.
 struct Textures {
-    /// F1, F2 and the F1 feature ID for the flagstones.
-    stones: Simd<3, 2>,
-    /// F2 − F1 with its gradient: the mortar's bump.
-    mortar: Texture<3, 2>,
+    /// The flagstones: the distance to the border of the sample's cell
+    /// (even mortar whatever the spacing of the points, where F2 − F1
+    /// widens into wedges between close pairs), its normal for the bevel,
+    /// and the cell's ID for the stone's colour.
+    stones: SimdBorder<3>,
     /// Fractal F1, five octaves: the foil's crumple.
     crumple: Texture<3, 1>,
     /// Fractal F1, three octaves: the hide's scales.
@@ -92,8 +93,7 @@ impl Textures {
     fn new() -> Self {
         let config = Config::default();
         Textures {
-            stones: Simd::new(Config { order: 2, ..config }, Outputs::Ids).expect("a valid configuration"),
-            mortar: Texture::new(config, Combination::crackle(), Fractal::default(), None).expect("valid"),
+            stones: SimdBorder::new(config).expect("a valid configuration"),
             crumple: Texture::new(config, Combination::f(1), Fractal::octaves(5), None).expect("valid"),
             scales: Texture::new(config, Combination::f(1), Fractal { octaves: 3, lacunarity: 2.0, gain: 0.35 }, None)
                 .expect("valid"),
@@ -115,18 +115,18 @@ impl Textures {
         if has(Material::Floor) {
             // Floor texture coordinates: 2.2 user units per metre.
             let at: [[f64; 3]; 8] = hits.map(|h| [h.point.x as f64 * 2.2, h.point.z as f64 * 2.2, 0.5]);
-            let cells = self.stones.evaluate8(&at);
-            let edges = self.mortar.gradient8(&at);
+            let border = self.stones.border8(&at);
             let stains = self.stain.turbulence8(&at.map(|p| [p[0] * 1.5, p[1] * 1.5, 0.3]), 4).to_array();
-            let (f1, f2, id) = (cells.distance[0].to_array(), cells.distance[1].to_array(), cells.id[0].to_array());
-            let (gx, gy) = (edges.gradient[0].to_array(), edges.gradient[1].to_array());
+            let (edge, id) = (border.distance.to_array(), border.feature.to_array());
+            let (gx, gy) = (border.normal[0].to_array(), border.normal[1].to_array());
             for i in (0..8).filter(|&i| hits[i].material == Material::Floor) {
-                let edge = f2[i] - f1[i];
-                let rim = (edge / 0.25).min(1.0);
-                // The stone's edge is rounded down into the mortar.
-                let g = Vec3::new(gx[i], 0.0, gy[i]) * (1.0 - rim) * 2.2;
+                let rim = (edge[i] / 0.12).min(1.0);
+                // The stone's edge is rounded down into the mortar: the
+                // border distance rises at one per unit along its normal
+                // (times 2.2 texture units per metre).
+                let g = Vec3::new(gx[i], 0.0, gy[i]) * (1.0 - rim) * 2.0 * 2.2;
                 let n = bump(Vec3::Y, g, 0.35);
-                let base = if edge < 0.06 {
+                let base = if edge[i] < 0.035 {
                     Vec3::splat(0.28)
                 } else {
                     Vec3::from(id_colour(id[i])) * 0.8 * (1.0 - 0.5 * stains[i].min(1.0))

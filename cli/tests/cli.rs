@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use worley::texture::{Combination, Fractal, Texture};
-use worley::{Config, Metric, Period};
+use worley::{Config, Metric, Period, SimdBorder};
 use worley_cli::picture::from_pfm;
 
 fn worley(args: &[&str]) -> Output {
@@ -120,6 +120,47 @@ fn a_periodic_render_tiles_and_matches_the_library() {
             }
         }
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--combo border`: the distance to the cell's border, as the library's
+/// lanes compute it on a periodic tile, bit for bit; other metrics are
+/// refused with the reason.
+#[test]
+fn a_border_render_matches_the_library_and_refuses_other_metrics() {
+    let dir = scratch("border");
+    let pfm = dir.join("border.pfm");
+    let out = worley(&[
+        "render",
+        "--dim",
+        "2",
+        "--combo",
+        "border",
+        "--period",
+        "4,4",
+        "--extent",
+        "8",
+        "--size",
+        "32x32",
+        "--png",
+        dir.join("border.png").to_str().unwrap(),
+        "--pfm",
+        pfm.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (w, _, values) = from_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+    let border = SimdBorder::<2>::new(Config::default()).unwrap();
+    let period = Period::new([4, 4]).unwrap();
+    for j in 0..32 {
+        for i in 0..32 {
+            let want = border.border_periodic(pixel([0.0, 0.0], 8.0, w, i, j), &period).distance;
+            assert_eq!(values[j * w + i].to_bits(), want.to_bits(), "pixel ({i}, {j})");
+        }
+    }
+    let refused = worley(&["render", "--combo", "border", "--metric", "chebyshev", "--png", "-"]);
+    assert!(!refused.status.success());
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(said.contains("Euclidean"), "{said}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

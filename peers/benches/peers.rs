@@ -31,7 +31,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use simdnoise::Cell2ReturnType;
 use std::hint::black_box;
 use std::time::Instant;
-use worley::{Config, Features32, Grid, Outputs, Simd};
+use worley::{Config, Features32, Grid, Outputs, Simd, SimdBorder};
 use worley_harness::sample_point;
 
 const RANDOM: usize = 1 << 18;
@@ -203,6 +203,7 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let f2 = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
     let f2_ids = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
     let f4 = Simd::<3, 4>::new(Config { order: 4, ..Config::default() }, Outputs::Distances).unwrap();
+    let border = SimdBorder::<3>::new(Config::default()).unwrap();
     let spec = grid_spec();
     let n = grid.len();
     let axes = |pts: &[[f32; 3]]| -> [Vec<f32>; 3] { std::array::from_fn(|a| pts.iter().map(|p| p[a]).collect()) };
@@ -235,6 +236,7 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let spec_2d = Grid { origin: [0.0, 0.0], step: [STEP, STEP], size: [SIDE, SIDE] };
     let spec_4d = Grid { origin: [0.0, 0.0, 0.5, 0.5], step: [STEP, STEP, 1.0, 1.0], size: [SIDE, SIDE, 1, 1] };
     let (mut o1_2d, mut o1_4d) = (vec![[0f32; 1]; n], vec![[0f32; 1]; n]);
+    let (mut border_g, mut border_r) = (vec![border.border([0.0; 3]); n], vec![border.border([0.0; 3]); random.len()]);
     let mut entries: Vec<Entry> = Vec::new();
     fn add<'a>(
         entries: &mut Vec<Entry<'a>>,
@@ -367,6 +369,22 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
             black_box(&crackle_r);
         }),
     );
+    // The distance to the cell's border beside F2 − F1: even mortar where
+    // F2 − F1 widens (with the neighbour's ID and the border's normal).
+    add(
+        &mut entries,
+        "worley SimdBorder border_grid",
+        "grid border",
+        n,
+        Box::new(|| border.border_grid(&spec, &mut border_g).unwrap()),
+    );
+    add(
+        &mut entries,
+        "worley SimdBorder border_slice",
+        "random border",
+        random.len(),
+        Box::new(|| border.border_slice(black_box(random), &mut border_r).unwrap()),
+    );
     for round in 0..3 + 15 {
         for e in entries.iter_mut() {
             let start = Instant::now();
@@ -406,9 +424,9 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         };
         let simd_ref = match *case {
             "grid F1" => of("simdnoise 3.1 F1", "grid F1"),
-            "grid F2−F1" => of("simdnoise 3.1 F2−F1", "grid F2−F1"),
+            "grid F2−F1" | "grid border" => of("simdnoise 3.1 F2−F1", "grid F2−F1"),
             "random F1" => of("simdnoise 3.1 F1", "random F1"),
-            "random F2−F1" => of("simdnoise 3.1 F2−F1", "random F2−F1"),
+            "random F2−F1" | "random border" => of("simdnoise 3.1 F2−F1", "random F2−F1"),
             _ => None,
         };
         let ratio = |r: Option<f64>| r.map_or("".to_string(), |r| format!("{:.2}", rate / r));

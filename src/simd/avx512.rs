@@ -36,10 +36,11 @@
 
 use std::arch::x86_64::{
     __m512, __m512i, __mmask16, _mm512_abs_ps, _mm512_add_epi32, _mm512_add_ps, _mm512_and_si512, _mm512_cmp_ps_mask,
-    _mm512_cmplt_epu32_mask, _mm512_cvtepi32_ps, _mm512_loadu_epi32, _mm512_loadu_ps, _mm512_mask_blend_epi32,
-    _mm512_mask_blend_ps, _mm512_max_ps, _mm512_min_epu32, _mm512_min_ps, _mm512_mul_ps, _mm512_mullo_epi32,
-    _mm512_set1_epi32, _mm512_set1_ps, _mm512_sqrt_ps, _mm512_srli_epi32, _mm512_storeu_epi32, _mm512_storeu_ps,
-    _mm512_sub_ps, _mm512_xor_si512, _CMP_EQ_OQ, _CMP_LE_OQ, _CMP_LT_OQ,
+    _mm512_cmpeq_epu32_mask, _mm512_cmplt_epu32_mask, _mm512_cvtepi32_ps, _mm512_div_ps, _mm512_loadu_epi32,
+    _mm512_loadu_ps, _mm512_mask_blend_epi32, _mm512_mask_blend_ps, _mm512_max_ps, _mm512_min_epu32, _mm512_min_ps,
+    _mm512_mul_ps, _mm512_mullo_epi32, _mm512_set1_epi32, _mm512_set1_ps, _mm512_sqrt_ps, _mm512_srli_epi32,
+    _mm512_storeu_epi32, _mm512_storeu_ps, _mm512_sub_epi32, _mm512_sub_ps, _mm512_xor_si512, _CMP_EQ_OQ, _CMP_LE_OQ,
+    _CMP_LT_OQ,
 };
 
 use super::batch::Point;
@@ -106,6 +107,10 @@ impl Lanes for Avx512 {
         unsafe { _mm512_mul_ps(a, b) }
     }
     #[inline(always)]
+    fn div(a: __m512, b: __m512) -> __m512 {
+        unsafe { _mm512_div_ps(a, b) }
+    }
+    #[inline(always)]
     fn min(a: __m512, b: __m512) -> __m512 {
         // `vminps x, y` is `x < y ? x : y`, so with b first it is the
         // one-lane rule, take b only where b < a.
@@ -141,6 +146,10 @@ impl Lanes for Avx512 {
         unsafe { _mm512_cmplt_epu32_mask(a, b) }
     }
     #[inline(always)]
+    fn u_eq(a: __m512i, b: __m512i) -> __mmask16 {
+        unsafe { _mm512_cmpeq_epu32_mask(a, b) }
+    }
+    #[inline(always)]
     fn select(m: __mmask16, a: __m512, b: __m512) -> __m512 {
         // A blend takes its second operand where the mask is set.
         unsafe { _mm512_mask_blend_ps(m, b, a) }
@@ -168,6 +177,10 @@ impl Lanes for Avx512 {
     #[inline(always)]
     fn u_add(a: __m512i, b: __m512i) -> __m512i {
         unsafe { _mm512_add_epi32(a, b) }
+    }
+    #[inline(always)]
+    fn u_sub(a: __m512i, b: __m512i) -> __m512i {
+        unsafe { _mm512_sub_epi32(a, b) }
     }
     #[inline(always)]
     fn u_mul(a: __m512i, b: __m512i) -> __m512i {
@@ -203,6 +216,10 @@ impl Lanes for Avx512 {
     }
     #[inline(always)]
     fn u24_to_f(a: __m512i) -> __m512 {
+        unsafe { _mm512_cvtepi32_ps(a) }
+    }
+    #[inline(always)]
+    fn i_to_f(a: __m512i) -> __m512 {
         unsafe { _mm512_cvtepi32_ps(a) }
     }
 }

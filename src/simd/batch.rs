@@ -531,7 +531,7 @@ impl<const D: usize, const N: usize> Held<D, N> {
 }
 
 /// Lanes located by cell and fraction; invalid lanes get cell 0.
-fn in_cell<L: Lanes, const D: usize>(cells: &[[i64; D]], fractions: &[[f32; D]]) -> Located<L, D> {
+pub(super) fn in_cell<L: Lanes, const D: usize>(cells: &[[i64; D]], fractions: &[[f32; D]]) -> Located<L, D> {
     let limit = MAX_CELL_COORD as u64;
     let mut cell = [[0i64; WIDEST]; D];
     let mut f = [[0f32; WIDEST]; D];

@@ -48,6 +48,8 @@ pub trait Lanes: Copy + 'static {
     fn sub(a: Self::F, b: Self::F) -> Self::F;
     /// a · b (rounded once; never fused)
     fn mul(a: Self::F, b: Self::F) -> Self::F;
+    /// a / b (correctly rounded; no approximate reciprocal)
+    fn div(a: Self::F, b: Self::F) -> Self::F;
     /// min(a, b) for non-NaN lanes
     fn min(a: Self::F, b: Self::F) -> Self::F;
     /// max(a, b) for non-NaN lanes
@@ -64,6 +66,8 @@ pub trait Lanes: Copy + 'static {
     fn eq(a: Self::F, b: Self::F) -> Self::M;
     /// Unsigned `a < b` per lane.
     fn u_lt(a: Self::U, b: Self::U) -> Self::M;
+    /// `a == b` per lane.
+    fn u_eq(a: Self::U, b: Self::U) -> Self::M;
     /// m ? a : b
     fn select(m: Self::M, a: Self::F, b: Self::F) -> Self::F;
     /// m ? a : b
@@ -79,6 +83,8 @@ pub trait Lanes: Copy + 'static {
 
     /// a + b (wrapping)
     fn u_add(a: Self::U, b: Self::U) -> Self::U;
+    /// a − b (wrapping)
+    fn u_sub(a: Self::U, b: Self::U) -> Self::U;
     /// a · b (wrapping)
     fn u_mul(a: Self::U, b: Self::U) -> Self::U;
     /// a ^ b
@@ -97,6 +103,9 @@ pub trait Lanes: Copy + 'static {
     fn u_shr24(a: Self::U) -> Self::U;
     /// a as f32 for a < 2^24 (exact)
     fn u24_to_f(a: Self::U) -> Self::F;
+    /// The bits of `a` read as an i32, converted to f32 (rounded to
+    /// nearest, ties to even; exact below 2^24 in magnitude).
+    fn i_to_f(a: Self::U) -> Self::F;
 }
 
 /// One lane: plain scalars.
@@ -155,6 +164,10 @@ impl Lanes for One {
         a * b
     }
     #[inline(always)]
+    fn div(a: f32, b: f32) -> f32 {
+        a / b
+    }
+    #[inline(always)]
     fn min(a: f32, b: f32) -> f32 {
         if b < a {
             b
@@ -195,6 +208,10 @@ impl Lanes for One {
         a < b
     }
     #[inline(always)]
+    fn u_eq(a: u32, b: u32) -> bool {
+        a == b
+    }
+    #[inline(always)]
     fn select(m: bool, a: f32, b: f32) -> f32 {
         if m {
             a
@@ -231,6 +248,10 @@ impl Lanes for One {
         a.wrapping_add(b)
     }
     #[inline(always)]
+    fn u_sub(a: u32, b: u32) -> u32 {
+        a.wrapping_sub(b)
+    }
+    #[inline(always)]
     fn u_mul(a: u32, b: u32) -> u32 {
         a.wrapping_mul(b)
     }
@@ -264,6 +285,10 @@ impl Lanes for One {
     }
     #[inline(always)]
     fn u24_to_f(a: u32) -> f32 {
+        a as i32 as f32
+    }
+    #[inline(always)]
+    fn i_to_f(a: u32) -> f32 {
         a as i32 as f32
     }
 }
@@ -319,6 +344,10 @@ macro_rules! wide_lanes {
                 a * b
             }
             #[inline(always)]
+            fn div(a: $f, b: $f) -> $f {
+                a / b
+            }
+            #[inline(always)]
             fn min(a: $f, b: $f) -> $f {
                 // Same lane rule as `One::min`: take b only where b < a. On x86
                 // that is the minimum instruction with b first, in every build
@@ -365,6 +394,11 @@ macro_rules! wide_lanes {
                 bytemuck::cast(x.simd_lt(y))
             }
             #[inline(always)]
+            fn u_eq(a: $u, b: $u) -> $f {
+                let (x, y): ($i, $i) = (bytemuck::cast(a), bytemuck::cast(b));
+                bytemuck::cast(x.simd_eq(y))
+            }
+            #[inline(always)]
             fn select(m: $f, a: $f, b: $f) -> $f {
                 m.select(a, b)
             }
@@ -391,6 +425,10 @@ macro_rules! wide_lanes {
             #[inline(always)]
             fn u_add(a: $u, b: $u) -> $u {
                 a + b
+            }
+            #[inline(always)]
+            fn u_sub(a: $u, b: $u) -> $u {
+                a - b
             }
             #[inline(always)]
             fn u_mul(a: $u, b: $u) -> $u {
@@ -426,6 +464,11 @@ macro_rules! wide_lanes {
             }
             #[inline(always)]
             fn u24_to_f(a: $u) -> $f {
+                let i: $i = bytemuck::cast(a);
+                $f::$from(i)
+            }
+            #[inline(always)]
+            fn i_to_f(a: $u) -> $f {
                 let i: $i = bytemuck::cast(a);
                 $f::$from(i)
             }

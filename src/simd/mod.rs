@@ -112,11 +112,13 @@
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
 mod avx512;
 pub mod batch;
+pub mod border;
 mod coherent;
 pub mod lanes;
 pub mod periodic;
 
 pub use batch::{Grid, Point, SizeError, TILE};
+pub use border::{Border32, Border8, SimdBorder};
 pub(crate) use coherent::GridRows;
 #[cfg(feature = "parallel")]
 pub(crate) use coherent::BAND;
@@ -298,6 +300,21 @@ impl<L: Lanes, const D: usize> Located<L, D> {
             cells: Cells::Full(cell),
             valid,
             period,
+        }
+    }
+}
+
+impl<L: Lanes, const D: usize> Located<L, D> {
+    /// The lanes' own cells, per axis and lane.
+    #[inline(always)]
+    fn cells_i64(&self) -> [[i64; WIDEST]; D] {
+        match &self.cells {
+            Cells::Full(cell) => *cell,
+            Cells::Low(low) => per_axis(|a| {
+                let mut lo = [0u32; WIDEST];
+                L::u_store(low[a], &mut lo[..L::N]);
+                lo.map(|t| i64::from(t as i32))
+            }),
         }
     }
 }
@@ -774,14 +791,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         mut open: L::M,
         best: &mut Best<L, D, N>,
     ) {
-        let cell = match &at.cells {
-            Cells::Full(cell) => *cell,
-            Cells::Low(low) => per_axis(|a| {
-                let mut lo = [0u32; WIDEST];
-                L::u_store(low[a], &mut lo[..L::N]);
-                lo.map(|t| i64::from(t as i32))
-            }),
-        };
+        let cell = at.cells_i64();
         for r in 2..=MAX_SHELLS {
             for offset in shell::<D>(r) {
                 let t: [L::U; D] = per_axis(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
@@ -925,26 +935,53 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         active: L::M,
         best: &mut Best<L, D, N>,
     ) {
-        // A loop, not a closure: in the run-time AVX-512 copy a closure here
-        // stayed an out-of-line call without its instructions (`per_axis`).
-        let mut delta = shifted;
-        for (a, d) in delta.iter_mut().enumerate() {
-            let (am, cm) = &p.wide.coordinate[a];
-            let s = L::u_add(L::u_mul(h, L::u_load(&am.0)), L::u_load(&cm.0));
-            *d = L::sub(*d, L::u24_to_f(L::u_shr8(s)));
-        }
+        let delta = Self::delta_of::<L>(p, h, shifted);
         let rank = L::select(active, metric.rank::<L, D>(&delta), L::f(f32::INFINITY));
         let id = if IDS {
-            let (am, cm) = &p.wide.id;
-            // The sentinel state is reported as INVALID_ID − 1
-            // (`definition::feature_id`): an unsigned minimum. Lanes
-            // without the point carry INVALID_ID, which loses every tie.
-            let id = L::u_min(L::u_add(L::u_mul(h, L::u_load(&am.0)), L::u_load(&cm.0)), L::u(INVALID_ID - 1));
-            L::select_u(active, id, L::u(INVALID_ID))
+            // Lanes without the point carry INVALID_ID, which loses every
+            // tie.
+            L::select_u(active, Self::id_of::<L>(p, h), L::u(INVALID_ID))
         } else {
             L::u(0)
         };
         best.insert::<IDS, DELTAS>(rank, delta, id);
+    }
+
+    /// The sample minus point `p` of the cell with hash `h`, in lane units
+    /// (`shifted` is the sample minus the cell's corner): every path that
+    /// meets a point computes its delta here, so the same point gives the
+    /// same bits whichever path, cell order or lane meets it.
+    #[inline(always)]
+    fn delta_of<L: Lanes>(p: &PointConstants<D>, h: L::U, shifted: [L::F; D]) -> [L::F; D] {
+        let c = Self::coordinates_of::<L>(p, h);
+        // A loop, not a closure: in the run-time AVX-512 copy a closure here
+        // stayed an out-of-line call without its instructions (`per_axis`).
+        let mut delta = shifted;
+        for (d, c) in delta.iter_mut().zip(c) {
+            *d = L::sub(*d, L::u24_to_f(c));
+        }
+        delta
+    }
+
+    /// Point `p` of the cell with hash `h` in the cell: its 24-bit
+    /// fixed-point coordinates, each below 2^24 (lane units).
+    #[inline(always)]
+    fn coordinates_of<L: Lanes>(p: &PointConstants<D>, h: L::U) -> [L::U; D] {
+        let mut c = [L::u(0); D];
+        for (a, c) in c.iter_mut().enumerate() {
+            let (am, cm) = &p.wide.coordinate[a];
+            *c = L::u_shr8(L::u_add(L::u_mul(h, L::u_load(&am.0)), L::u_load(&cm.0)));
+        }
+        c
+    }
+
+    /// The ID of point `p` of the cell with hash `h`. The sentinel state is
+    /// reported as INVALID_ID − 1 (`definition::feature_id`): an unsigned
+    /// minimum.
+    #[inline(always)]
+    fn id_of<L: Lanes>(p: &PointConstants<D>, h: L::U) -> L::U {
+        let (am, cm) = &p.wide.id;
+        L::u_min(L::u_add(L::u_mul(h, L::u_load(&am.0)), L::u_load(&cm.0)), L::u(INVALID_ID - 1))
     }
 
     /// Populations of an unsorted (bumped) table: a lookup per lane.

@@ -100,7 +100,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 /// Lanes reduced into the period: r = x mod P (exact), the cell ⌊r⌋ and the
 /// fraction r − ⌊r⌋ (exact), the cell wrapped once more in case the
 /// remainder of a tiny negative x rounded up to P.
-fn wrap<L: Lanes, const D: usize>(xs: &[[f64; D]], period: &Period<D>) -> Located<L, D> {
+pub(super) fn wrap<L: Lanes, const D: usize>(xs: &[[f64; D]], period: &Period<D>) -> Located<L, D> {
     let p = period.0.map(i64::from);
     let mut cell = [[0i64; WIDEST]; D];
     let mut f = [[0f32; WIDEST]; D];

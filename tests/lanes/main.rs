@@ -7,6 +7,7 @@
 //! in each SIMD build (default, AVX2, AVX-512: `wide` picks its code path at
 //! compile time), and each of those builds then compiles only what it runs.
 
+mod border;
 mod coherent;
 mod hard_cases;
 mod simd;

@@ -1,0 +1,577 @@
+//! # The distance to the border of the sample's cell, in lanes
+//!
+//! The same quantity as [`Reference::border`](crate::Reference::border)
+//! (read its [module's text](crate::reference::border) for the geometry
+//! and the certification), computed in f32 lanes eight samples at a time.
+//!
+//! ## How
+//! 1. **F1 with its delta and ID**: the SIMD kernel's own search
+//!    ([`Simd`] of order 1, IDs and deltas), so F1 is the kernel's, bit for
+//!    bit, and its exactness is the kernel's.
+//! 2. **F1's point as integers**: the point of F1's ID whose delta has F1's
+//!    bits is met again among the cells no farther than F1, and its
+//!    position relative to the sample's cell is kept as integers in lane
+//!    units (2^−24 cells): a cell's corner plus the point's 24-bit
+//!    coordinates, exact in i32.
+//! 3. **The border search**: every lane visits its own cell, then the rest
+//!    of the 3^d block near side first (the kernel's mirrored frame), then
+//!    Chebyshev shells, each cell only for the lanes whose F1 + 2b reaches
+//!    it, until the outside of the block covered is beyond F1 + 2b in every
+//!    lane. For each point p_j, u = p_j − p₁ is the exact integer difference
+//!    rounded once to f32, and b_j = −u·(δ₁ + δ_j) / (2|u|) with δ the
+//!    sample minus the point: no difference of squared distances, whose
+//!    cancellation near the border would cost digits, and no normal tilted
+//!    by rounding when two points lie close together (where F2 − F1 draws
+//!    its wedges).
+//!
+//! In [`Mode::Window`] both searches stop at the 3^d block, as the
+//! reference's window mode does.
+//!
+//! Every delta comes from the one routine the kernel uses for every point
+//! it meets, and a cell enters it the same way in every stage, so the
+//! search meets F1's point with F1's bits; u = 0 exactly for it and for a
+//! point at its very position, which are skipped (they share one cell, as
+//! in the reference).
+//!
+//! ## Bits
+//! Each lane's result depends on that lane alone, through IEEE operations
+//! that are the same in every build (add, subtract, multiply, divide,
+//! square root, compare, select): [`SimdBorder::border`], the eight-lane,
+//! slice, grid, large-world and periodic entry points give a point the
+//! same bits, in the default and the AVX2 and AVX-512 builds.
+//!
+//! ## Error
+//! δ in f32 carries a few roundings of the sample's distance to the point,
+//! and u one rounding of its length, so b is within
+//! 4ε_f32·(2·F1 + 2·b + 1/S) of the f64 reference (S the pattern's scale),
+//! and the normal within a few ε_f32; the neighbour is the reference's
+//! except where two planes lie that close. `tests/lanes/border.rs`
+//! measures both: at most 0.18 of that bound and 1.4·10^−7 on the normal,
+//! over random samples in 2D, 3D and 4D, lattice values, sparse points,
+//! window mode and samples around pairs of points 10^−3 cells apart. The
+//! skip and stop tests carry a relative slack of 2^−12 on the side of
+//! visiting more, far above that rounding, so no plane the reference could
+//! pick is left unvisited.
+//!
+//! ## Speed
+//! One border costs about four F2 evaluations of the same samples (F1,
+//! finding F1's point again, and a search that reaches F1 + 2b, farther
+//! than F2); the peers bench (`peers/`) reports it beside F2 − F1.
+
+use wide::{f32x8, u32x8};
+
+use super::batch::in_cell;
+use super::lanes::{Eight, Lanes, WIDEST};
+use super::periodic::wrap;
+use super::{outside, per_axis, words, Best, Grid, Located, Outputs, Period, Point, Simd, SizeError, UNIT, WHOLE};
+use crate::config::{Config, ConfigError, Metric, Mode};
+use crate::definition::{FRACTION_BITS, INVALID_ID};
+use crate::reference::{shell, MAX_SHELLS};
+
+/// Relative slack of the skip and stop tests (see the module's text).
+const SLACK: f32 = 1.0 + 1.0 / 4096.0;
+
+/// The border of one sample's cell, in f32: the f32 counterpart of
+/// [`Border`](crate::Border).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Border32<const D: usize> {
+    /// The distance to the nearest bisector plane, user units; NaN for bad
+    /// input, +∞ in window mode when the 3^d block holds fewer than two
+    /// points.
+    pub distance: f32,
+    /// The unit normal of that plane, pointing into the sample's cell: the
+    /// gradient of `distance`. NaN where `distance` is not finite.
+    pub normal: [f32; D],
+    /// The ID of F1's point, whose cell holds the sample.
+    pub feature: u32,
+    /// The ID of the point across the nearest border.
+    pub neighbour: u32,
+}
+
+/// The borders of eight samples, one per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct Border8<const D: usize> {
+    /// Distances to the nearest bisector plane.
+    pub distance: f32x8,
+    /// Unit normals per axis.
+    pub normal: [f32x8; D],
+    /// IDs of F1's points.
+    pub feature: u32x8,
+    /// IDs of the points across the nearest borders.
+    pub neighbour: u32x8,
+}
+
+impl<const D: usize> Border8<D> {
+    /// Lane `i` (0..8).
+    pub fn lane(&self, i: usize) -> Border32<D> {
+        Border32 {
+            distance: self.distance.to_array()[i],
+            normal: self.normal.map(|v| v.to_array()[i]),
+            feature: self.feature.to_array()[i],
+            neighbour: self.neighbour.to_array()[i],
+        }
+    }
+
+    /// Every lane.
+    pub fn lanes(&self) -> [Border32<D>; 8] {
+        std::array::from_fn(|i| self.lane(i))
+    }
+}
+
+/// The distance to the border of the sample's Voronoi cell, eight samples
+/// at a time (see the [module's text](self)). Euclidean only.
+///
+/// ```
+/// use worley::{Config, Outputs, Simd, SimdBorder};
+/// let border = SimdBorder::<3>::new(Config::default()).unwrap();
+/// let f = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Ids).unwrap();
+/// let x = [0.3, -2.0, 7.5];
+/// let (b, f) = (border.border(x), f.evaluate(x));
+/// // Every bisector is at least (F2 − F1) / 2 away, and the nearest is no
+/// // farther than F2's.
+/// assert!(b.distance >= 0.5 * (f.distance[1] - f.distance[0]) * (1.0 - 1e-5));
+/// assert_eq!(b.feature, f.id[0]);
+/// ```
+#[derive(Clone, Debug)]
+pub struct SimdBorder<const D: usize> {
+    /// F1 with its delta and ID.
+    kernel: Simd<D, 1>,
+}
+
+/// The running nearest plane per lane, in lane units.
+struct Plane<L: Lanes, const D: usize> {
+    /// b, the distance to it.
+    distance: L::F,
+    /// u = p_j − p₁, its normal before scaling.
+    u: [L::F; D],
+    /// |u|.
+    length: L::F,
+    /// The ID of p_j.
+    id: L::U,
+}
+
+impl<const D: usize> SimdBorder<D> {
+    /// Builds the evaluator; `config.order` does not matter.
+    ///
+    /// # Errors
+    /// [`ConfigError::BorderMetric`] unless the metric is Euclidean, or the
+    /// first other invalid field of `config`.
+    ///
+    /// ```
+    /// use worley::{Config, ConfigError, Metric, SimdBorder};
+    /// let manhattan = Config { metric: Metric::Manhattan, ..Config::default() };
+    /// assert_eq!(SimdBorder::<2>::new(manhattan).unwrap_err(), ConfigError::BorderMetric(Metric::Manhattan));
+    /// ```
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        if !matches!(config.metric, Metric::Euclidean) {
+            return Err(ConfigError::BorderMetric(config.metric));
+        }
+        Ok(SimdBorder { kernel: Simd::new(Config { order: 1, ..config }, Outputs::IdsAndDeltas)? })
+    }
+
+    /// The configuration (order 1).
+    pub fn config(&self) -> &Config {
+        self.kernel.config()
+    }
+
+    /// One sample: lane 0 of [`SimdBorder::border8`] of it.
+    pub fn border(&self, x: [f64; D]) -> Border32<D> {
+        self.border8(&[x; 8]).lane(0)
+    }
+
+    /// Eight samples, one per lane.
+    ///
+    /// ```
+    /// use worley::{Config, SimdBorder};
+    /// let border = SimdBorder::<2>::new(Config::default()).unwrap();
+    /// let x: [[f64; 2]; 8] = std::array::from_fn(|i| [i as f64 * 0.7, -1.25]);
+    /// assert_eq!(border.border8(&x).lane(5), border.border(x[5]));
+    /// ```
+    pub fn border8(&self, x: &[[f64; D]; 8]) -> Border8<D> {
+        self.at(&self.kernel.locate::<Eight>(x))
+    }
+
+    /// Eight samples as lanes per axis (each lane's f32 coordinates, as
+    /// [`Simd::evaluate_lanes`] takes them).
+    pub fn border_lanes(&self, x: [f32x8; D]) -> Border8<D> {
+        let arrays = x.map(|v| v.to_array());
+        self.border8(&std::array::from_fn(|i| std::array::from_fn(|a| f64::from(arrays[a][i]))))
+    }
+
+    /// One sample given as a cell and the fraction within it, as
+    /// [`Simd::evaluate_in_cell`] takes it (bad input as there).
+    pub fn border_in_cell(&self, cell: [i64; D], fraction: [f32; D]) -> Border32<D> {
+        self.border8_in_cell(&[cell; 8], &[fraction; 8]).lane(0)
+    }
+
+    /// Eight samples given as cells and fractions.
+    pub fn border8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8]) -> Border8<D> {
+        self.at(&in_cell::<Eight, D>(cells, fractions))
+    }
+
+    /// One sample of the periodic pattern, `x` in cells, as
+    /// [`Simd::evaluate_periodic`] takes it.
+    pub fn border_periodic(&self, x: [f64; D], period: &Period<D>) -> Border32<D> {
+        self.border8_periodic(&[x; 8], period).lane(0)
+    }
+
+    /// Eight samples of the periodic pattern, `x` in cells.
+    pub fn border8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>) -> Border8<D> {
+        self.at(&wrap::<Eight, D>(x, period))
+    }
+
+    /// Many points into a caller's buffer, eight at a time.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+    pub fn border_slice<P: Point<D>>(&self, xs: &[P], out: &mut [Border32<D>]) -> Result<(), SizeError> {
+        if out.len() < xs.len() {
+            return Err(SizeError { needed: xs.len(), given: out.len() });
+        }
+        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
+            let block: [[f64; D]; 8] = std::array::from_fn(|i| chunk[i.min(chunk.len() - 1)].coordinates());
+            dst.copy_from_slice(&self.border8(&block).lanes()[..dst.len()]);
+        }
+        Ok(())
+    }
+
+    /// Every point of a grid (axis 0 fastest), eight at a time on the
+    /// calling thread.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out.len() != grid.len()`; nothing is written.
+    ///
+    /// ```
+    /// use worley::{Config, Grid, SimdBorder};
+    /// let border = SimdBorder::<2>::new(Config::default()).unwrap();
+    /// let grid = Grid { origin: [0.0, 0.0], step: [0.1, 0.1], size: [20, 10] };
+    /// let mut out = vec![border.border([0.0; 2]); 200];
+    /// border.border_grid(&grid, &mut out).unwrap();
+    /// assert_eq!(out[47], border.border(grid.point(47)));
+    /// ```
+    pub fn border_grid(&self, grid: &Grid<D>, out: &mut [Border32<D>]) -> Result<(), SizeError> {
+        let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(SizeError { needed, given: out.len() });
+        }
+        for (c, dst) in out.chunks_mut(8).enumerate() {
+            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(c * 8 + i.min(dst.len() - 1)));
+            dst.copy_from_slice(&self.border8(&block).lanes()[..dst.len()]);
+        }
+        Ok(())
+    }
+
+    /// [`SimdBorder::border_grid`] on all cores ([`Grid::fill_by_eights`]),
+    /// with the same bits.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out.len() != grid.len()`; nothing is written.
+    #[cfg(feature = "parallel")]
+    pub fn border_grid_parallel(&self, grid: &Grid<D>, out: &mut [Border32<D>]) -> Result<(), SizeError> {
+        grid.fill_by_eights(out, |block| self.border8(block).lanes())
+    }
+
+    /// F1, then the border search, for located lanes.
+    fn at(&self, at: &Located<Eight, D>) -> Border8<D> {
+        let k = &self.kernel;
+        let (_, _, raw) = k.dispatch8_stage::<WHOLE>(at, Best::empty());
+        let (plane, found) = k.border_search8(at, &raw);
+        let good = Eight::and(found, k.good_lanes::<Eight>(at, raw.rank[0], plane.distance));
+        let scale = Eight::mul(Eight::f(1.0 / UNIT), Eight::f(k.inv_scale));
+        let distance = Eight::mul(plane.distance, scale);
+        let normal = per_axis(|a| Eight::select(good, -plane.u[a] / plane.length, Eight::f(f32::NAN)));
+        Border8 {
+            distance: Eight::select(good, distance, Eight::f(f32::NAN)),
+            normal,
+            feature: Eight::select_u(good, raw.id[0], Eight::u(INVALID_ID)),
+            neighbour: Eight::select_u(good, plane.id, Eight::u(INVALID_ID)),
+        }
+    }
+}
+
+impl<const D: usize> Simd<D, 1> {
+    /// Lanes with a result: not bad input, and no search (F1's or the
+    /// border's) that gave up at [`MAX_SHELLS`] (NaN).
+    #[inline(always)]
+    fn good_lanes<L: Lanes>(&self, at: &Located<L, D>, f1: L::F, b: L::F) -> L::M {
+        let mut valid = [0f32; WIDEST];
+        for (v, ok) in valid.iter_mut().zip(&at.valid) {
+            *v = if *ok { 1.0 } else { 0.0 };
+        }
+        let valid = L::lt(L::f(0.5), L::f_load(&valid[..L::N]));
+        // A comparison with NaN is false.
+        let numbers = L::and(L::le(L::f(0.0), f1), L::le(L::f(0.0), b));
+        L::and(valid, numbers)
+    }
+
+    /// [`Simd::border_search`] in eight lanes, through its AVX2 copy where
+    /// this build lacks AVX2 and the CPU has it, as the kernel's own eight
+    /// lanes run ([`Simd::dispatch8_stage`]): the same operations, so the
+    /// same bits.
+    #[inline(always)]
+    fn border_search8(&self, at: &Located<Eight, D>, nearest: &Best<Eight, D, 1>) -> (Plane<Eight, D>, f32x8) {
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if super::runtime_avx2() {
+            // SAFETY: `border_search_avx2` requires AVX2 and nothing else,
+            // and `runtime_avx2` has just seen the CPU report it.
+            #[allow(unsafe_code)]
+            return unsafe { self.border_search_avx2(at, nearest) };
+        }
+        self.border_search::<Eight>(at, nearest)
+    }
+
+    /// [`Simd::border_search`] compiled with AVX2 enabled (see
+    /// [`Simd::dispatch_avx2`]): in a default build `wide`'s 32-bit lane
+    /// multiply of the point generator is a scalar fallback, which LLVM
+    /// lowers to one instruction here.
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+    #[target_feature(enable = "avx2")]
+    fn border_search_avx2(&self, at: &Located<Eight, D>, nearest: &Best<Eight, D, 1>) -> (Plane<Eight, D>, f32x8) {
+        self.border_search::<Eight>(at, nearest)
+    }
+
+    /// The nearest bisector plane between F1's point (`nearest`, as the
+    /// kernel holds it: squared rank and delta in lane units) and any other
+    /// point, per lane; lanes whose F1's point was not met again are left
+    /// out of `found` (never seen: it is met where the kernel met it).
+    #[inline(always)]
+    fn border_search<L: Lanes>(&self, at: &Located<L, D>, nearest: &Best<L, D, 1>) -> (Plane<L, D>, L::M) {
+        let f1 = L::sqrt(nearest.rank[0]);
+        let mut plane =
+            Plane { distance: L::f(f32::INFINITY), u: [L::f(0.0); D], length: L::f(0.0), id: L::u(INVALID_ID) };
+        // Lanes with an F1 (not NaN, not +∞ from an empty window).
+        let mut open = L::lt(f1, L::f(f32::INFINITY));
+        if !L::any(open) {
+            return (plane, open);
+        }
+        let frame = Frame::<L, D>::new(at);
+        let cell = at.cells_i64();
+        let (p1, found) = self.find_nearest::<L>(at, &frame, &cell, nearest, open);
+        open = L::and(open, found);
+        let reach = |plane: &Plane<L, D>| {
+            let r = L::mul(L::add(f1, L::add(plane.distance, plane.distance)), L::f(SLACK));
+            L::mul(r, r)
+        };
+        for offset in &self.block {
+            let c = frame.cell(offset);
+            let needs = L::and(open, L::le(c.rank, reach(&plane)));
+            if L::any(needs) {
+                self.border_cell::<L>(&c, needs, nearest, &p1, &mut plane);
+            }
+        }
+        if self.config.mode == Mode::Window {
+            return (plane, found);
+        }
+        for r in 1..=MAX_SHELLS {
+            let edge = outside::<L, D>(&at.f, r as f32 * UNIT);
+            open = L::and(open, L::le(L::mul(edge, edge), reach(&plane)));
+            if !L::any(open) {
+                return (plane, found);
+            }
+            if r == MAX_SHELLS {
+                break;
+            }
+            for offset in shell::<D>(r + 1) {
+                let c = Frame::<L, D>::far_cell(at, &cell, &offset);
+                let needs = L::and(open, L::le(c.rank, reach(&plane)));
+                if L::any(needs) {
+                    self.border_cell::<L>(&c, needs, nearest, &p1, &mut plane);
+                }
+            }
+        }
+        // Uncertified after MAX_SHELLS (never seen for valid configurations):
+        // NaN rather than a possibly wrong value.
+        plane.distance = L::select(open, L::f(f32::NAN), plane.distance);
+        (plane, found)
+    }
+
+    /// F1's point again, as an integer position relative to the sample's
+    /// cell (lane units), so that u = p_j − p₁ is exact: it is the point of
+    /// F1's ID whose delta has F1's bits, in a cell no farther than F1.
+    #[inline(always)]
+    fn find_nearest<L: Lanes>(
+        &self,
+        at: &Located<L, D>,
+        frame: &Frame<L, D>,
+        cell: &[[i64; WIDEST]; D],
+        nearest: &Best<L, D, 1>,
+        open: L::M,
+    ) -> ([L::U; D], L::M) {
+        let limit = L::mul(nearest.rank[0], L::f(SLACK * SLACK));
+        let mut p1 = [L::u(0); D];
+        // 1 where the point is still to be found, as lanes of f32.
+        let mut missing = L::select(open, L::f(1.0), L::f(0.0));
+        let mut look = |c: &CellAt<L, D>, missing: &mut L::F| {
+            let needs = L::and(L::lt(L::f(0.5), *missing), L::le(c.rank, limit));
+            if !L::any(needs) {
+                return;
+            }
+            let h = self.hash::<L>(c.terms);
+            let top = self.population::<L>(h);
+            for p in &self.points {
+                let active = L::and(needs, L::lt(self.key::<L>(p), top));
+                if !L::any(active) {
+                    break;
+                }
+                let q = Self::coordinates_of::<L>(p, h);
+                let mut same = L::and(active, L::u_eq(Self::id_of::<L>(p, h), nearest.id[0]));
+                for (a, qa) in q.iter().enumerate() {
+                    same = L::and(same, L::eq(L::sub(c.shifted[a], L::u24_to_f(*qa)), nearest.delta[0][a]));
+                }
+                for a in 0..D {
+                    p1[a] = L::select_u(same, L::u_add(c.corner[a], q[a]), p1[a]);
+                }
+                *missing = L::select(same, L::f(0.0), *missing);
+            }
+        };
+        for offset in &self.block {
+            look(&frame.cell(offset), &mut missing);
+        }
+        for r in 2..=MAX_SHELLS {
+            if !L::any(L::lt(L::f(0.5), missing)) {
+                break;
+            }
+            for offset in shell::<D>(r) {
+                look(&Frame::<L, D>::far_cell(at, cell, &offset), &mut missing);
+            }
+        }
+        (p1, L::and(open, L::lt(missing, L::f(0.5))))
+    }
+
+    /// The points of cell `c` against the running plane, in the lanes of
+    /// `needs`; `p1` is F1's point (see [`Simd::find_nearest`]).
+    #[inline(always)]
+    fn border_cell<L: Lanes>(
+        &self,
+        c: &CellAt<L, D>,
+        needs: L::M,
+        nearest: &Best<L, D, 1>,
+        p1: &[L::U; D],
+        plane: &mut Plane<L, D>,
+    ) {
+        let h = self.hash::<L>(c.terms);
+        let top = self.population::<L>(h);
+        let d1 = nearest.delta[0];
+        for p in &self.points {
+            let active = L::and(needs, L::lt(self.key::<L>(p), top));
+            if !L::any(active) {
+                break;
+            }
+            let q = Self::coordinates_of::<L>(p, h);
+            let id = Self::id_of::<L>(p, h);
+            // u = p_j − p₁ exactly in integers, then rounded once;
+            // b = u·(m − x) / |u| with m − x = −(δ₁ + δ_j) / 2.
+            let mut uu = L::f(0.0);
+            let mut us = L::f(0.0);
+            let mut u = [L::f(0.0); D];
+            for a in 0..D {
+                u[a] = L::i_to_f(L::u_sub(L::u_add(c.corner[a], q[a]), p1[a]));
+                let dj = L::sub(c.shifted[a], L::u24_to_f(q[a]));
+                uu = L::add(uu, L::mul(u[a], u[a]));
+                us = L::add(us, L::mul(u[a], L::add(d1[a], dj)));
+            }
+            let length = L::sqrt(uu);
+            let b = L::div(L::mul(us, L::f(-0.5)), length);
+            // A tie with a later ID may round to a hair below zero.
+            let b = L::select(L::lt(b, L::f(0.0)), L::f(0.0), b);
+            let tie = L::and(L::eq(b, plane.distance), L::u_lt(id, plane.id));
+            // u = 0: F1's point itself, or one at its very position.
+            let better = L::and(L::and(active, L::lt(L::f(0.0), uu)), L::or(L::lt(b, plane.distance), tie));
+            plane.distance = L::select(better, b, plane.distance);
+            plane.length = L::select(better, length, plane.length);
+            plane.id = L::select_u(better, id, plane.id);
+            for (slot, ua) in plane.u.iter_mut().zip(u) {
+                *slot = L::select(better, ua, *slot);
+            }
+        }
+    }
+}
+
+/// A cell around the lanes' samples, per lane: the squared gap from the
+/// sample to it, its axis words, the sample minus its corner (f32) and its
+/// corner relative to the sample's cell (integers), all in lane units.
+struct CellAt<L: Lanes, const D: usize> {
+    rank: L::F,
+    terms: [L::U; D],
+    shifted: [L::F; D],
+    corner: [L::U; D],
+}
+
+/// The 3^d block in the kernel's mirrored frame: per axis and offset + 1
+/// (near, own, far), what [`CellAt`] holds, computed as the kernel's search
+/// computes it, so a point's delta has the kernel's bits.
+struct Frame<L: Lanes, const D: usize> {
+    terms: [[L::U; 3]; D],
+    shifted: [[L::F; 3]; D],
+    gap: [[L::F; 3]; D],
+    corner: [[L::U; 3]; D],
+}
+
+impl<L: Lanes, const D: usize> Frame<L, D> {
+    #[inline(always)]
+    fn new(at: &Located<L, D>) -> Self {
+        let one = L::f(UNIT);
+        let (up, down) = (L::u(1 << FRACTION_BITS), L::u((1u32 << FRACTION_BITS).wrapping_neg()));
+        let mut frame = Frame {
+            terms: [[L::u(0); 3]; D],
+            shifted: [[L::f(0.0); 3]; D],
+            gap: [[L::f(0.0); 3]; D],
+            corner: [[L::u(0); 3]; D],
+        };
+        for a in 0..D {
+            let f = at.f[a];
+            let flip = L::lt(L::f(0.5 * UNIT), f);
+            let t = at.words[a];
+            frame.terms[a] = [L::select_u(flip, t[2], t[0]), t[1], L::select_u(flip, t[0], t[2])];
+            let (below, above) = (L::add(f, one), L::sub(f, one));
+            frame.shifted[a] = [L::select(flip, above, below), f, L::select(flip, below, above)];
+            let rest = L::sub(one, f);
+            let (near, far) = (L::select(flip, rest, f), L::select(flip, f, rest));
+            frame.gap[a] = [L::mul(near, near), L::f(0.0), L::mul(far, far)];
+            frame.corner[a] = [L::select_u(flip, up, down), L::u(0), L::select_u(flip, down, up)];
+        }
+        frame
+    }
+
+    /// The cell at `offset` of the mirrored block (−1 near, 0 own, +1 far).
+    #[inline(always)]
+    fn cell(&self, offset: &[i64; D]) -> CellAt<L, D> {
+        let index: [usize; D] = per_axis(|a| (offset[a] + 1) as usize);
+        let mut rank = self.gap[0][index[0]];
+        for (gap, i) in self.gap.iter().zip(index).skip(1) {
+            rank = L::add(rank, gap[i]);
+        }
+        CellAt {
+            rank,
+            terms: per_axis(|a| self.terms[a][index[a]]),
+            shifted: per_axis(|a| self.shifted[a][index[a]]),
+            corner: per_axis(|a| self.corner[a][index[a]]),
+        }
+    }
+
+    /// The cell at `offset` from the lanes' own cells (`cell`), beyond the
+    /// 3^d block, as the kernel's widening computes it.
+    #[inline(always)]
+    fn far_cell(at: &Located<L, D>, cell: &[[i64; WIDEST]; D], offset: &[i64; D]) -> CellAt<L, D> {
+        let gaps: [L::F; D] = per_axis(|a| {
+            let o = offset[a];
+            if o > 0 {
+                L::sub(L::f(o as f32 * UNIT), at.f[a])
+            } else if o < 0 {
+                L::sub(at.f[a], L::f((o + 1) as f32 * UNIT))
+            } else {
+                L::f(0.0)
+            }
+        });
+        let mut rank = L::mul(gaps[0], gaps[0]);
+        for g in &gaps[1..] {
+            rank = L::add(rank, L::mul(*g, *g));
+        }
+        CellAt {
+            rank,
+            terms: per_axis(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a]))),
+            shifted: per_axis(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT))),
+            corner: per_axis(|a| L::u((offset[a] << FRACTION_BITS) as u32)),
+        }
+    }
+}
