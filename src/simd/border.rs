@@ -18,11 +18,13 @@
 //!    Chebyshev shells, each cell only for the lanes whose F1 + 2b reaches
 //!    it, until the outside of the block covered is beyond F1 + 2b in every
 //!    lane. For each point p_j, u = p_j − p₁ is the exact integer difference
-//!    rounded once to f32, and b_j = −u·(δ₁ + δ_j) / (2|u|) with δ the
-//!    sample minus the point: no difference of squared distances, whose
-//!    cancellation near the border would cost digits, and no normal tilted
-//!    by rounding when two points lie close together (where F2 − F1 draws
-//!    its wedges).
+//!    rounded once to f32, and b_j = k_j / (2|u|) with k_j = −u·(δ₁ + δ_j)
+//!    and δ the sample minus the point: no difference of squared distances,
+//!    whose cancellation near the border would cost digits, and no normal
+//!    tilted by rounding when two points lie close together (where F2 − F1
+//!    draws its wedges). Planes are compared as k_j²·|u|² < k²·|u_j|² in
+//!    cells², all terms non-negative, so no point costs a square root or a
+//!    division; b itself is taken once per cell, for the skip test.
 //!
 //! In [`Mode::Window`] both searches stop at the 3^d block, as the
 //! reference's window mode does.
@@ -140,14 +142,26 @@ pub struct SimdBorder<const D: usize> {
 
 /// The running nearest plane per lane, in lane units.
 struct Plane<L: Lanes, const D: usize> {
-    /// b, the distance to it.
-    distance: L::F,
-    /// u = p_j − p₁, its normal before scaling.
+    /// k = max(−u·(δ₁ + δ_j), 0) in cells² (b = k / (2|u|)); +∞ before any
+    /// plane.
+    key: L::F,
+    /// |u|² in cells².
+    uu: L::F,
+    /// u = p_j − p₁ in lane units: the normal before scaling.
     u: [L::F; D],
-    /// |u|.
-    length: L::F,
     /// The ID of p_j.
     id: L::U,
+}
+
+/// 2^−48: lane units² to cells², exactly.
+const CELLS2: f32 = 1.0 / (1u64 << 48) as f32;
+
+impl<L: Lanes, const D: usize> Plane<L, D> {
+    /// b = k / (2|u|) in lane units (+∞ before any plane).
+    #[inline(always)]
+    fn distance(&self) -> L::F {
+        L::mul(L::div(self.key, L::sqrt(self.uu)), L::f(0.5 * UNIT))
+    }
 }
 
 impl<const D: usize> SimdBorder<D> {
@@ -276,10 +290,14 @@ impl<const D: usize> SimdBorder<D> {
         let k = &self.kernel;
         let (_, _, raw) = k.dispatch8_stage::<WHOLE>(at, Best::empty());
         let (plane, found) = k.border_search8(at, &raw);
-        let good = Eight::and(found, k.good_lanes::<Eight>(at, raw.rank[0], plane.distance));
+        let b = plane.distance();
+        let good = Eight::and(found, k.good_lanes::<Eight>(at, raw.rank[0], b));
         let scale = Eight::mul(Eight::f(1.0 / UNIT), Eight::f(k.inv_scale));
-        let distance = Eight::mul(plane.distance, scale);
-        let normal = per_axis(|a| Eight::select(good, -plane.u[a] / plane.length, Eight::f(f32::NAN)));
+        let distance = Eight::mul(b, scale);
+        let length = Eight::mul(Eight::sqrt(plane.uu), Eight::f(UNIT));
+        // No normal without a plane (+∞ in window mode with one point).
+        let planar = Eight::and(good, Eight::lt(b, Eight::f(f32::INFINITY)));
+        let normal = per_axis(|a| Eight::select(planar, -plane.u[a] / length, Eight::f(f32::NAN)));
         Border8 {
             distance: Eight::select(good, distance, Eight::f(f32::NAN)),
             normal,
@@ -337,8 +355,7 @@ impl<const D: usize> Simd<D, 1> {
     #[inline(always)]
     fn border_search<L: Lanes>(&self, at: &Located<L, D>, nearest: &Best<L, D, 1>) -> (Plane<L, D>, L::M) {
         let f1 = L::sqrt(nearest.rank[0]);
-        let mut plane =
-            Plane { distance: L::f(f32::INFINITY), u: [L::f(0.0); D], length: L::f(0.0), id: L::u(INVALID_ID) };
+        let mut plane = Plane { key: L::f(f32::INFINITY), uu: L::f(1.0), u: [L::f(0.0); D], id: L::u(INVALID_ID) };
         // Lanes with an F1 (not NaN, not +∞ from an empty window).
         let mut open = L::lt(f1, L::f(f32::INFINITY));
         if !L::any(open) {
@@ -349,7 +366,8 @@ impl<const D: usize> Simd<D, 1> {
         let (p1, found) = self.find_nearest::<L>(at, &frame, &cell, nearest, open);
         open = L::and(open, found);
         let reach = |plane: &Plane<L, D>| {
-            let r = L::mul(L::add(f1, L::add(plane.distance, plane.distance)), L::f(SLACK));
+            let b = plane.distance();
+            let r = L::mul(L::add(f1, L::add(b, b)), L::f(SLACK));
             L::mul(r, r)
         };
         for offset in &self.block {
@@ -381,7 +399,7 @@ impl<const D: usize> Simd<D, 1> {
         }
         // Uncertified after MAX_SHELLS (never seen for valid configurations):
         // NaN rather than a possibly wrong value.
-        plane.distance = L::select(open, L::f(f32::NAN), plane.distance);
+        plane.key = L::select(open, L::f(f32::NAN), plane.key);
         (plane, found)
     }
 
@@ -460,7 +478,8 @@ impl<const D: usize> Simd<D, 1> {
             let q = Self::coordinates_of::<L>(p, h);
             let id = Self::id_of::<L>(p, h);
             // u = p_j − p₁ exactly in integers, then rounded once;
-            // b = u·(m − x) / |u| with m − x = −(δ₁ + δ_j) / 2.
+            // b = u·(m − x) / |u| with m − x = −(δ₁ + δ_j) / 2, that is
+            // b = k / (2|u|) with k = −u·(δ₁ + δ_j).
             let mut uu = L::f(0.0);
             let mut us = L::f(0.0);
             let mut u = [L::f(0.0); D];
@@ -470,15 +489,18 @@ impl<const D: usize> Simd<D, 1> {
                 uu = L::add(uu, L::mul(u[a], u[a]));
                 us = L::add(us, L::mul(u[a], L::add(d1[a], dj)));
             }
-            let length = L::sqrt(uu);
-            let b = L::div(L::mul(us, L::f(-0.5)), length);
             // A tie with a later ID may round to a hair below zero.
-            let b = L::select(L::lt(b, L::f(0.0)), L::f(0.0), b);
-            let tie = L::and(L::eq(b, plane.distance), L::u_lt(id, plane.id));
+            let key = L::mul(L::select(L::lt(us, L::f(0.0)), L::sub(L::f(0.0), us), L::f(0.0)), L::f(CELLS2));
+            let uu = L::mul(uu, L::f(CELLS2));
+            // b_j < b ⇔ k_j²·|u|² < k²·|u_j|², all terms ≥ 0: no square
+            // root or division per point. In cells², the products stay far
+            // inside f32's range.
+            let (mine, theirs) = (L::mul(L::mul(key, key), plane.uu), L::mul(L::mul(plane.key, plane.key), uu));
+            let tie = L::and(L::eq(mine, theirs), L::u_lt(id, plane.id));
             // u = 0: F1's point itself, or one at its very position.
-            let better = L::and(L::and(active, L::lt(L::f(0.0), uu)), L::or(L::lt(b, plane.distance), tie));
-            plane.distance = L::select(better, b, plane.distance);
-            plane.length = L::select(better, length, plane.length);
+            let better = L::and(L::and(active, L::lt(L::f(0.0), uu)), L::or(L::lt(mine, theirs), tie));
+            plane.key = L::select(better, key, plane.key);
+            plane.uu = L::select(better, uu, plane.uu);
             plane.id = L::select_u(better, id, plane.id);
             for (slot, ua) in plane.u.iter_mut().zip(u) {
                 *slot = L::select(better, ua, *slot);

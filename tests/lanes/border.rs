@@ -33,6 +33,7 @@ fn agrees<const D: usize>(config: Config, points: &[[f64; D]]) -> Agreement {
         assert_eq!(g.feature, want.feature, "{D}D at {x:?}: F1's ID ({g:?} against {want:?})");
         if !want.distance.is_finite() {
             assert_eq!(f64::from(g.distance), want.distance, "{D}D at {x:?}: {g:?} against {want:?}");
+            assert!(g.normal.iter().all(|v| v.is_nan()), "{D}D at {x:?}: a normal without a plane: {g:?}");
             continue;
         }
         assert_eq!(g.neighbour, want.neighbour, "{D}D at {x:?}: the neighbour ({g:?} against {want:?})");
