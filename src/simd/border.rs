@@ -597,3 +597,54 @@ impl<L: Lanes, const D: usize> Frame<L, D> {
         }
     }
 }
+
+/// A default build runs the border search through its AVX2 copy where the
+/// CPU has AVX2 and through `wide`'s SSE2 code elsewhere: the two must
+/// give the same bits.
+#[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
+mod runtime_avx2_tests {
+    use super::*;
+    use crate::simd::sample_point;
+
+    fn same<const D: usize>(config: Config) {
+        if !super::super::runtime_avx2() {
+            eprintln!("this CPU has no AVX2: only the SSE2 border search exists to test");
+            return;
+        }
+        let border = SimdBorder::<D>::new(config).unwrap();
+        let k = &border.kernel;
+        for batch in 0..1500 {
+            // Ordinary points, points beyond 2^31 cells in some lanes (the
+            // lane-wise locate) and a NaN lane among good ones.
+            let range = [40.0, 3.0e10][batch % 2];
+            let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(12, batch * 8 + i, range));
+            if batch % 7 == 0 {
+                points[batch % 8][0] = f64::NAN;
+            }
+            let at = k.locate::<Eight>(&points);
+            let (_, _, raw) = k.dispatch8_stage::<WHOLE>(&at, Best::empty());
+            let (plain, plain_found) = k.border_search::<Eight>(&at, &raw);
+            // SAFETY: `runtime_avx2` returned true above.
+            #[allow(unsafe_code)]
+            let (avx2, avx2_found) = unsafe { k.border_search_avx2(&at, &raw) };
+            let bits = |v: f32x8| v.to_array().map(f32::to_bits);
+            let what = format!("{D}D batch {batch}");
+            assert_eq!(bits(plain.key), bits(avx2.key), "{what}: k");
+            assert_eq!(bits(plain.uu), bits(avx2.uu), "{what}: |u|²");
+            assert_eq!(plain.id.to_array(), avx2.id.to_array(), "{what}: neighbours");
+            assert_eq!(plain_found.to_bitmask(), avx2_found.to_bitmask(), "{what}: F1's point met again");
+            for a in 0..D {
+                assert_eq!(bits(plain.u[a]), bits(avx2.u[a]), "{what}: u");
+            }
+        }
+    }
+
+    #[test]
+    fn the_avx2_recompilation_gives_the_sse2_bits() {
+        same::<2>(Config::default());
+        same::<3>(Config::default());
+        same::<4>(Config::default());
+        same::<2>(Config { density: 0.5, ..Config::default() });
+        same::<3>(Config { mode: Mode::Window, density: 1.0, ..Config::default() });
+    }
+}

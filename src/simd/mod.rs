@@ -1370,7 +1370,8 @@ impl<const N: usize> Simd<4, N> {
 /// build goes through whichever of the two the CPU selects; this one keeps
 /// the other bit for bit equal to it.
 /// Point i of a seeded set, uniform in [−range, range]^D, for the tests of
-/// the run-time copies (`runtime_avx2_tests`, `avx512::tests`).
+/// the run-time copies (`runtime_avx2_tests`, `avx512::tests`,
+/// `border::runtime_avx2_tests`).
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx512f")))]
 fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
     std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
