@@ -351,15 +351,18 @@ impl<const D: usize> Simd<D, 1> {
     /// The nearest bisector plane between F1's point (`nearest`, as the
     /// kernel holds it: squared rank and delta in lane units) and any other
     /// point, per lane; lanes whose F1's point was not met again are left
-    /// out of `found` (never seen: it is met where the kernel met it).
+    /// out of the mask returned (never seen: it is met where the kernel met
+    /// it). Lanes without an F1 (NaN, or +∞ in an empty window) are in it
+    /// and keep b = +∞.
     #[inline(always)]
     fn border_search<L: Lanes>(&self, at: &Located<L, D>, nearest: &Best<L, D, 1>) -> (Plane<L, D>, L::M) {
         let f1 = L::sqrt(nearest.rank[0]);
         let mut plane = Plane { key: L::f(f32::INFINITY), uu: L::f(1.0), u: [L::f(0.0); D], id: L::u(INVALID_ID) };
-        // Lanes with an F1 (not NaN, not +∞ from an empty window).
+        // Lanes with an F1 (not NaN, not +∞ from an empty window); the
+        // others have no point to find and keep b = +∞.
         let mut open = L::lt(f1, L::f(f32::INFINITY));
         if !L::any(open) {
-            return (plane, open);
+            return (plane, L::eq(f1, f1));
         }
         let frame = Frame::<L, D>::new(at);
         let cell = at.cells_i64();
@@ -453,7 +456,7 @@ impl<const D: usize> Simd<D, 1> {
                 look(&Frame::<L, D>::far_cell(at, cell, &offset), &mut missing);
             }
         }
-        (p1, L::and(open, L::lt(missing, L::f(0.5))))
+        (p1, L::lt(missing, L::f(0.5)))
     }
 
     /// The points of cell `c` against the running plane, in the lanes of
