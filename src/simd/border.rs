@@ -56,9 +56,11 @@
 //! pick is left unvisited.
 //!
 //! ## Speed
-//! One border costs about four F2 evaluations of the same samples (F1,
-//! finding F1's point again, and a search that reaches F1 + 2b, farther
-//! than F2); the peers bench (`peers/`) reports it beside F2 − F1.
+//! On scattered samples one border costs about five F2 − F1 evaluations
+//! (F1, finding F1's point again, and a search that reaches F1 + 2b,
+//! farther than F2, over the union of the cells the eight lanes need); on
+//! a grid about 23, since grids of F_n share their cells and borders do
+//! not yet. The peers bench (`peers/`) reports it beside F2 − F1.
 
 use wide::{f32x8, u32x8};
 
