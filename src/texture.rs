@@ -642,8 +642,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         Range { lo: q(0.001), hi: q(0.999) }
     }
 
-    /// The eight lanes' borders at `frequency · x`, as [`Texture::features`]
-    /// places the octave.
+    /// The eight lanes' borders at `frequency · x` ([`Texture::octave`]).
     #[inline(always)]
     fn borders(
         &self,
@@ -652,23 +651,13 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         frequency: f64,
         period: Option<Period<D>>,
     ) -> Border8<D> {
-        match (period, self.period) {
-            (Some(p), Some(base)) => {
-                let base = base.cells().map(f64::from);
-                let y = x.map(|q| std::array::from_fn(|a| q[a].rem_euclid(base[a]) * frequency));
-                border.border8_periodic(&y, &p)
-            }
-            _ => {
-                if frequency == 1.0 {
-                    border.border8(x)
-                } else {
-                    border.border8(&x.map(|q| q.map(|v| v * frequency)))
-                }
-            }
+        match self.octave(x, frequency, period) {
+            (y, Some(p)) => border.border8_periodic(&y, &p),
+            (y, None) => border.border8(&y),
         }
     }
 
-    /// The eight lanes' features at `frequency · x`.
+    /// The eight lanes' features at `frequency · x` ([`Texture::octave`]).
     #[inline(always)]
     fn features(
         &self,
@@ -677,21 +666,31 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         frequency: f64,
         period: Option<Period<D>>,
     ) -> Features8<D, N> {
+        match self.octave(x, frequency, period) {
+            (y, Some(p)) => kernel.evaluate8_periodic(&y, &p),
+            (y, None) => kernel.evaluate8(&y),
+        }
+    }
+
+    /// The eight lanes' coordinates in an octave of frequency `frequency`,
+    /// and the octave's period when the texture tiles.
+    #[inline(always)]
+    fn octave(
+        &self,
+        x: &[[f64; D]; 8],
+        frequency: f64,
+        period: Option<Period<D>>,
+    ) -> ([[f64; D]; 8], Option<Period<D>>) {
         match (period, self.period) {
             (Some(p), Some(base)) => {
                 // Reduce into the base period first, so that x and x + k·P
                 // give the same octave coordinates bit for bit.
                 let base = base.cells().map(f64::from);
-                let y = x.map(|q| std::array::from_fn(|a| q[a].rem_euclid(base[a]) * frequency));
-                kernel.evaluate8_periodic(&y, &p)
+                (x.map(|q| std::array::from_fn(|a| q[a].rem_euclid(base[a]) * frequency)), Some(p))
             }
-            _ => {
-                if frequency == 1.0 {
-                    kernel.evaluate8(x)
-                } else {
-                    kernel.evaluate8(&x.map(|q| q.map(|v| v * frequency)))
-                }
-            }
+            // v · 1 is v: the first octave's coordinates are the input's.
+            _ if frequency == 1.0 => (*x, None),
+            _ => (x.map(|q| q.map(|v| v * frequency)), None),
         }
     }
 }

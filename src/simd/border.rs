@@ -609,7 +609,7 @@ impl<L: Lanes, const D: usize> Frame<L, D> {
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 mod runtime_avx2_tests {
     use super::*;
-    use crate::simd::sample_point;
+    use crate::simd::test_batch;
 
     fn same<const D: usize>(config: Config) {
         if !super::super::runtime_avx2() {
@@ -619,13 +619,7 @@ mod runtime_avx2_tests {
         let border = SimdBorder::<D>::new(config).unwrap();
         let k = &border.kernel;
         for batch in 0..1500 {
-            // Ordinary points, points beyond 2^31 cells in some lanes (the
-            // lane-wise locate) and a NaN lane among good ones.
-            let range = [40.0, 3.0e10][batch % 2];
-            let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(12, batch * 8 + i, range));
-            if batch % 7 == 0 {
-                points[batch % 8][0] = f64::NAN;
-            }
+            let points = test_batch::<D>(12, batch);
             let at = k.locate::<Eight>(&points);
             let (_, _, raw) = k.dispatch8_stage::<WHOLE>(&at, Best::empty());
             let (plain, plain_found) = k.border_search::<Eight>(&at, &raw);

@@ -1377,6 +1377,19 @@ fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
     std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
 }
 
+/// Batch `batch` of eight points for the tests of the run-time AVX2
+/// copies: ordinary points, points beyond 2^31 cells in some lanes (the
+/// lane-wise locate) and, in every seventh batch, a NaN lane among good ones.
+#[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
+fn test_batch<const D: usize>(seed: u64, batch: usize) -> [[f64; D]; 8] {
+    let range = [40.0, 3.0e10][batch % 2];
+    let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(seed, batch * 8 + i, range));
+    if batch.is_multiple_of(7) {
+        points[batch % 8][0] = f64::NAN;
+    }
+    points
+}
+
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 mod runtime_avx2_tests {
     use super::*;
@@ -1390,13 +1403,7 @@ mod runtime_avx2_tests {
             let kernel = Simd::<D, N>::new(config, outputs).unwrap();
             let mut lanewise = 0;
             for batch in 0..1500 {
-                // Ordinary points, points beyond 2^31 cells in some lanes (the
-                // lane-wise locate) and a NaN lane among good ones.
-                let range = [40.0, 3.0e10][batch % 2];
-                let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(11, batch * 8 + i, range));
-                if batch % 7 == 0 {
-                    points[batch % 8][0] = f64::NAN;
-                }
+                let points = test_batch::<D>(11, batch);
                 let located = kernel.locate::<Eight>(&points);
                 lanewise += usize::from(matches!(located.cells, Cells::Full(_)));
                 let plain = kernel.dispatch::<Eight>(&located);
