@@ -114,6 +114,7 @@
 
 pub mod config;
 pub mod definition;
+pub mod filter;
 pub mod math;
 pub mod perlin;
 pub mod reference;

@@ -18,9 +18,12 @@
 //! assert!(g.value > 0.0 && g.defined && grad.iter().all(|v| v.is_finite()));
 //! ```
 
+use std::sync::OnceLock;
+
 use wide::f32x8;
 
-use crate::config::{Config, ConfigError, Metric};
+use crate::config::{Config, ConfigError, Metric, Mode};
+use crate::filter::BlendCurve;
 use crate::simd::{Border8, Features8, GridRows, Outputs, Period, PeriodError, Point, Simd, SimdBorder};
 
 /// How F1..Fn are combined into one value.
@@ -329,6 +332,9 @@ pub struct Texture<const D: usize, const N: usize> {
     /// ∂(user coordinate)/∂(input coordinate): 1, or 1/S for periodic
     /// textures addressed in cells.
     input_scale: f32,
+    /// The first octave's blend curve, measured on first use by a filtered
+    /// call ([`Texture::blend_curve`]).
+    curve: OnceLock<BlendCurve>,
 }
 
 impl<const D: usize, const N: usize> Texture<D, N> {
@@ -387,7 +393,17 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             amplitude *= fractal.gain;
         }
         let input_scale = if period.is_some() { (1.0 / values.pattern().scale()) as f32 } else { 1.0 };
-        Ok(Texture { values, deltas, border, combination, fractal, period, octaves, input_scale })
+        Ok(Texture {
+            values,
+            deltas,
+            border,
+            combination,
+            fractal,
+            period,
+            octaves,
+            input_scale,
+            curve: OnceLock::new(),
+        })
     }
 
     /// The combination.
@@ -410,7 +426,8 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         &self.values
     }
 
-    /// Eight values.
+    /// Eight values ([`Texture::filtered8`] with zero footprints, the same
+    /// bits).
     ///
     /// ```
     /// use worley::texture::{Combination, Fractal, Texture};
@@ -419,15 +436,140 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// assert_eq!(t.value8(&points).to_array()[4], t.value(points[4]));
     /// ```
     pub fn value8(&self, x: &[[f64; D]; 8]) -> f32x8 {
+        self.filtered8(x, [0.0; 8])
+    }
+
+    /// Eight values, each standing for a footprint: a square of side
+    /// `width[i]` (in the texture's input units: user units, or cells for a
+    /// periodic texture) on a surface through `x[i]`, such as a pixel's
+    /// preimage. Octave i blends its point sample towards the combination's
+    /// mean with the weight of [`Texture::blend_curve`] at `width[i]` ·
+    /// frequency_i ([`crate::filter`] derives it); an octave that no lane
+    /// resolves is not evaluated, so the cost falls as the footprint grows.
+    ///
+    /// A zero width gives [`Texture::value8`]'s bits; values are continuous
+    /// in position and in width; an infinite width gives the fractal sum of
+    /// the means. A NaN or negative width, non-finite coordinates, or
+    /// coordinates beyond the kernel's range in any octave give NaN, as the
+    /// point sample does.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<3, 2>::new(worley::Config::default(), Combination::crackle(), Fractal::octaves(4), None).unwrap();
+    /// let x: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64 * 0.7, 0.2, -3.0]);
+    /// // A zero footprint is the point sample; a huge one the mean.
+    /// assert_eq!(t.filtered8(&x, [0.0; 8]).to_array(), t.value8(&x).to_array());
+    /// let far = t.filtered8(&x, [1e6; 8]).to_array();
+    /// assert!(far.iter().all(|&v| v == far[0]));
+    /// ```
+    pub fn filtered8(&self, x: &[[f64; D]; 8], width: [f32; 8]) -> f32x8 {
         let mut sum = f32x8::splat(0.0);
         for (i, &(frequency, amplitude, period)) in self.octaves.iter().enumerate() {
-            let v = match &self.border {
-                Some(border) => self.borders(border, x, frequency, period).distance,
-                None => self.combination.value(&self.features(&self.values, x, frequency, period).distance),
+            let alpha = self.weights(&width, frequency);
+            let v = if alpha.iter().all(|&a| a == 0.0) {
+                self.unresolved(x, frequency, period)
+            } else if alpha == [1.0; 8] {
+                self.octave_value(x, i)
+            } else {
+                self.blend_curve().blend8(self.octave_value(x, i), alpha)
             };
             sum = if i == 0 { v } else { sum + f32x8::splat(amplitude) * v };
         }
         sum
+    }
+
+    /// One value standing for a footprint of side `width` (lane 0 of
+    /// [`Texture::filtered8`]).
+    pub fn filtered(&self, x: [f64; D], width: f32) -> f32 {
+        self.filtered8(&[x; 8], [width; 8]).to_array()[0]
+    }
+
+    /// The blend curve of the texture's first octave (its combination at
+    /// frequency 1, in its input units), measured on first use by a
+    /// filtered call and kept (about 4·10^5 evaluations of one octave);
+    /// octave i reads it at width · frequency_i. Its mean is the Poisson
+    /// process's closed form where one is known (linear combinations of F_n
+    /// and F3² − F2², in exact mode with no bump and no period), else the
+    /// measured mean.
+    pub fn blend_curve(&self) -> &BlendCurve {
+        self.curve.get_or_init(|| {
+            let curve = BlendCurve::measure(|x: &[[f64; D]; 8]| self.octave_value(x, 0).to_array(), 0x0F17_7E25);
+            match self.poisson_mean() {
+                Some(mean) => curve.with_mean(mean),
+                None => curve,
+            }
+        })
+    }
+
+    /// How many octaves a footprint of side `width` evaluates (the others
+    /// contribute their mean): the cost of [`Texture::filtered8`] relative
+    /// to [`Texture::value8`].
+    pub fn resolved_octaves(&self, width: f32) -> usize {
+        self.octaves.iter().filter(|&&(f, _, _)| self.weights(&[width; 8], f)[0] != 0.0).count()
+    }
+
+    /// The point samples' weights in an octave of frequency `frequency`;
+    /// all 1, without measuring the curve, for zero widths.
+    fn weights(&self, width: &[f32; 8], frequency: f64) -> [f32; 8] {
+        if width.iter().all(|&w| w == 0.0) {
+            return [1.0; 8];
+        }
+        let curve = self.blend_curve();
+        width.map(|w| if w == 0.0 { 1.0 } else { curve.weight(w * frequency as f32) })
+    }
+
+    /// Octave i's combination (no amplitude) at eight points.
+    #[inline(always)]
+    fn octave_value(&self, x: &[[f64; D]; 8], i: usize) -> f32x8 {
+        let (frequency, _, period) = self.octaves[i];
+        match &self.border {
+            Some(border) => self.borders(border, x, frequency, period).distance,
+            None => self.combination.value(&self.features(&self.values, x, frequency, period).distance),
+        }
+    }
+
+    /// An octave no lane resolves: the mean, and NaN where evaluating it
+    /// would have given NaN (coordinates the kernel cannot locate).
+    fn unresolved(&self, x: &[[f64; D]; 8], frequency: f64, period: Option<Period<D>>) -> f32x8 {
+        let mean = self.blend_curve().mean();
+        let (y, p) = self.octave(x, frequency, period);
+        let pattern = self.values.pattern();
+        f32x8::from(y.map(|q| {
+            let located = match p {
+                Some(_) => q.iter().all(|v| v.is_finite()),
+                None => pattern.locate(q).is_some(),
+            };
+            if located {
+                mean
+            } else {
+                f32::NAN
+            }
+        }))
+    }
+
+    /// The combination's mean under the Poisson process, in closed form,
+    /// where one is known: E[F_k] = Γ(k + 1/d) / (Γ(k) Γ(1 + 1/d)) ·
+    /// (V_2/V_m)^(1/d) and E[F_k²] = Γ(k + 2/d) / (Γ(k) Γ(1 + 1/d)²) ·
+    /// (V_2/V_m)^(2/d), with V_2 and V_m the Euclidean and the metric's unit
+    /// ball volumes (the scale makes the Euclidean E[F1] one).
+    fn poisson_mean(&self) -> Option<f32> {
+        use crate::math::{euclidean_ball_volume, gamma};
+        let config = self.values.config();
+        if config.mode != Mode::Exact || config.bump != 0.0 || self.period.is_some() {
+            return None;
+        }
+        let d = D as f64;
+        let ratio = euclidean_ball_volume(D) / config.metric.unit_ball_volume(D);
+        let moment = |k: usize, m: f64| {
+            let k = k as f64;
+            gamma(k + m / d) / (gamma(k) * gamma(1.0 + 1.0 / d).powf(m)) * ratio.powf(m / d)
+        };
+        let mean = match &self.combination {
+            Combination::Linear(c) => c.iter().enumerate().map(|(k, &ck)| f64::from(ck) * moment(k + 1, 1.0)).sum(),
+            Combination::SquareDifference => moment(3, 2.0) - moment(2, 2.0),
+            Combination::Product | Combination::Border => return None,
+        };
+        Some(mean as f32)
     }
 
     /// One value (lane 0 of [`Texture::value8`]).
@@ -442,18 +584,40 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         self.value8(&[x; 8]).to_array()[0]
     }
 
-    /// Eight values and their analytic gradients.
+    /// Eight values and their analytic gradients ([`Texture::filtered_gradient8`]
+    /// with zero footprints, the same bits).
     pub fn gradient8(&self, x: &[[f64; D]; 8]) -> Gradient8<D> {
+        self.filtered_gradient8(x, [0.0; 8])
+    }
+
+    /// Eight values standing for footprints, as [`Texture::filtered8`] (the
+    /// same bits), and their gradients: each octave's gradient times its
+    /// weight (the footprint taken as locally constant), so fine octaves'
+    /// bumps fade where the footprint cannot show them.
+    pub fn filtered_gradient8(&self, x: &[[f64; D]; 8], width: [f32; 8]) -> Gradient8<D> {
         let metric = self.values.config().metric;
         let mut value = f32x8::splat(0.0);
         let mut gradient = [f32x8::splat(0.0); D];
         let mut defined = [true; 8];
         for (i, &(frequency, amplitude, period)) in self.octaves.iter().enumerate() {
-            // ∂/∂x of amplitude · C(frequency · x) = amplitude · frequency · ∇C.
+            let alpha = self.weights(&width, frequency);
+            let blend = |v: f32x8| if alpha == [1.0; 8] { v } else { self.blend_curve().blend8(v, alpha) };
+            if alpha.iter().all(|&a| a == 0.0) {
+                let v = self.unresolved(x, frequency, period);
+                value = if i == 0 { v } else { value + f32x8::splat(amplitude) * v };
+                for (d, v) in defined.iter_mut().zip(v.to_array()) {
+                    *d &= !v.is_nan();
+                }
+                continue;
+            }
+            // ∂/∂x of amplitude · C(frequency · x) = amplitude · frequency · ∇C,
+            // times the octave's weight.
             let chain = f32x8::splat(amplitude * frequency as f32 * self.input_scale);
+            let chain = if alpha == [1.0; 8] { chain } else { chain * f32x8::from(alpha) };
             if let Some(border) = &self.border {
                 let b = self.borders(border, x, frequency, period);
-                value = if i == 0 { b.distance } else { value + f32x8::splat(amplitude) * b.distance };
+                let v = blend(b.distance);
+                value = if i == 0 { v } else { value + f32x8::splat(amplitude) * v };
                 for (sum, n) in gradient.iter_mut().zip(&b.normal) {
                     *sum += chain * *n;
                 }
@@ -463,7 +627,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
                 continue;
             }
             let f = self.features(&self.deltas, x, frequency, period);
-            let v = self.combination.value(&f.distance);
+            let v = blend(self.combination.value(&f.distance));
             value = if i == 0 { v } else { value + f32x8::splat(amplitude) * v };
             let w = self.combination.weights(&f.distance);
             for ((wk, fk), dk) in w.iter().zip(&f.distance).zip(&f.delta) {
@@ -478,6 +642,9 @@ impl<const D: usize, const N: usize> Texture<D, N> {
                     *d &= o;
                 }
             }
+        }
+        for (d, v) in defined.iter_mut().zip(value.to_array()) {
+            *d &= !v.is_nan();
         }
         Gradient8 { value, gradient, defined }
     }
@@ -497,7 +664,8 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         (sample, g.gradient.map(|v| v.to_array()[0]))
     }
 
-    /// Values of many points into a caller's buffer.
+    /// Values of many points into a caller's buffer ([`Texture::value8`]
+    /// eight at a time).
     ///
     /// # Errors
     /// [`crate::SizeError`] if `out` is shorter than `xs`; nothing is written.
@@ -511,15 +679,46 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// assert_eq!(out[17], t.value([17.0f32 * 0.2, 0.0, 0.0].map(f64::from)));
     /// ```
     pub fn values<P: Point<D>>(&self, xs: &[P], out: &mut [f32]) -> Result<(), crate::SizeError> {
+        self.filtered_values(xs, None, out)
+    }
+
+    /// Values of many points, point i standing for a footprint of side
+    /// `widths[i]` ([`Texture::filtered8`] eight at a time); `None` is the
+    /// point samples of [`Texture::values`].
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out` or `widths` is shorter than `xs`;
+    /// nothing is written.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::octaves(3), None).unwrap();
+    /// let points: Vec<[f64; 2]> = (0..20).map(|i| [i as f64 * 0.3, 1.0]).collect();
+    /// let widths: Vec<f32> = (0..20).map(|i| i as f32 * 0.05).collect();
+    /// let mut out = vec![0.0; 20];
+    /// t.filtered_values(&points, Some(&widths), &mut out).unwrap();
+    /// assert_eq!(out[9], t.filtered(points[9], widths[9]));
+    /// ```
+    pub fn filtered_values<P: Point<D>>(
+        &self,
+        xs: &[P],
+        widths: Option<&[f32]>,
+        out: &mut [f32],
+    ) -> Result<(), crate::SizeError> {
         if out.len() < xs.len() {
             return Err(crate::SizeError { needed: xs.len(), given: out.len() });
         }
-        for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
+        if let Some(w) = widths.filter(|w| w.len() < xs.len()) {
+            return Err(crate::SizeError { needed: xs.len(), given: w.len() });
+        }
+        for (c, (chunk, dst)) in xs.chunks(8).zip(out.chunks_mut(8)).enumerate() {
             let mut block = [[0.0; D]; 8];
-            for (b, p) in block.iter_mut().zip(chunk) {
-                *b = p.coordinates();
+            let mut width = [0.0; 8];
+            for (i, p) in chunk.iter().enumerate() {
+                block[i] = p.coordinates();
+                width[i] = widths.map_or(0.0, |w| w[c * 8 + i]);
             }
-            let v = self.value8(&block).to_array();
+            let v = self.filtered8(&block, width).to_array();
             dst.copy_from_slice(&v[..dst.len()]);
         }
         Ok(())
@@ -552,8 +751,32 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// assert_eq!(image[32 + 3], t.value(grid.point(32 + 3)));
     /// ```
     pub fn values_grid(&self, grid: &crate::Grid<D>, out: &mut [f32]) -> Result<(), crate::SizeError> {
-        let Some(octaves) = self.octave_grids(grid) else {
-            return grid.fill_by_eights(out, |block| self.value8(block).to_array());
+        self.filtered_grid(grid, 0.0, out)
+    }
+
+    /// Values of every point of a grid, each standing for a footprint of
+    /// side `width` (a grid's samples usually stand for their step): the
+    /// same bits as [`Texture::filtered8`] at each point, through the grid
+    /// tiles octave by octave where [`Texture::values_grid`] takes them
+    /// (octaves the footprint does not resolve are not evaluated), eight
+    /// points at a time otherwise.
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out.len() != grid.len()`.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Grid;
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::octaves(6), None).unwrap();
+    /// let grid = Grid { origin: [0.0, 0.0], step: [0.5, 0.5], size: [16, 16] };
+    /// let mut image = vec![0.0; 16 * 16];
+    /// t.filtered_grid(&grid, 0.5, &mut image).unwrap();
+    /// assert_eq!(image[16 + 3], t.filtered(grid.point(16 + 3), 0.5));
+    /// ```
+    pub fn filtered_grid(&self, grid: &crate::Grid<D>, width: f32, out: &mut [f32]) -> Result<(), crate::SizeError> {
+        let alpha: Vec<f32> = self.octaves.iter().map(|&(f, _, _)| self.weights(&[width; 8], f)[0]).collect();
+        let Some(octaves) = self.octave_grids(grid, &alpha) else {
+            return grid.fill_by_eights(out, |block| self.filtered8(block, [width; 8]).to_array());
         };
         let needed = grid.len().ok_or(crate::SizeError { needed: usize::MAX, given: out.len() })?;
         if out.len() != needed {
@@ -563,18 +786,29 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         if needed == 0 {
             return Ok(());
         }
-        let rows: Vec<GridRows<'_, D>> = octaves.iter().map(|g| self.values.grid_rows(g)).collect();
-        // Rows `first..` of every octave, combined and summed into `dst`.
+        let mean = if alpha.iter().all(|&a| a == 1.0) { f32::NAN } else { self.blend_curve().mean() };
+        // Only the octaves the footprint resolves are evaluated.
+        let rows: Vec<Option<GridRows<'_, D>>> =
+            octaves.iter().zip(&alpha).map(|(g, &a)| (a != 0.0).then(|| self.values.grid_rows(g))).collect();
+        // Rows `first..` of every octave, combined and summed into `dst`,
+        // in the order and with the operations of `filtered8`.
         let band = |first: usize, dst: &mut [f32]| {
             let mut distances = vec![[0f32; N]; dst.len()];
             for (i, (octave, &(_, amplitude, _))) in rows.iter().zip(&self.octaves).enumerate() {
+                let a = alpha[i];
+                let Some(octave) = octave else {
+                    for s in dst.iter_mut() {
+                        *s = if i == 0 { mean } else { *s + amplitude * mean };
+                    }
+                    continue;
+                };
                 self.values.grid_rows_distances(octave, first, &mut distances);
                 for (sum, d) in dst.chunks_mut(8).zip(distances.chunks(8)) {
                     let f: [f32x8; N] =
                         std::array::from_fn(|k| f32x8::from(std::array::from_fn(|j| d[j.min(d.len() - 1)][k])));
                     let v = self.combination.value(&f).to_array();
                     for (s, v) in sum.iter_mut().zip(v) {
-                        // As value8: the first octave, then sum + amplitude · v.
+                        let v = if a == 1.0 { v } else { a * v + (1.0 - a) * mean };
                         *s = if i == 0 { v } else { *s + amplitude * v };
                     }
                 }
@@ -598,7 +832,14 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// octave's frequency), where that gives the octave's coordinates bit
     /// for bit: no period, every frequency a power of two, and nothing
     /// scaled near overflow, no NaN or infinite origin or step.
-    fn octave_grids(&self, grid: &crate::Grid<D>) -> Option<Vec<crate::Grid<D>>> {
+    ///
+    /// An octave the footprint does not resolve (weight 0) is its mean
+    /// without evaluation, which is its value only where the kernel can
+    /// locate every point: such an octave also needs the grid's extent
+    /// within the kernel's range (else eight points at a time, which give
+    /// NaN where the kernel would). A NaN weight takes eight points at a
+    /// time too.
+    fn octave_grids(&self, grid: &crate::Grid<D>, alpha: &[f32]) -> Option<Vec<crate::Grid<D>>> {
         let power_of_two = |f: f64| f.is_normal() && f > 0.0 && f.to_bits() & ((1u64 << 52) - 1) == 0;
         // The largest magnitude any point's coordinate or partial sum takes.
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
@@ -606,7 +847,12 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let suits = finite
             && self.border.is_none()
             && self.period.is_none()
-            && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300);
+            && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300)
+            && alpha.iter().zip(&self.octaves).all(|(&a, &(f, _, _))| {
+                (0.0..=1.0).contains(&a)
+                    && (a != 0.0
+                        || extent * f * self.values.pattern().scale() < crate::definition::MAX_CELL_COORD / 2.0)
+            });
         suits.then(|| {
             self.octaves
                 .iter()

@@ -498,3 +498,94 @@ mod tests {
         assert!((mean - 0.5).abs() < 0.05);
     }
 }
+
+/// What [`filtered_continuity`] found.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FilteredContinuity {
+    /// Pairs straddling a cell face, edge or corner, at a common footprint.
+    pub position_pairs: u64,
+    /// Of those, pairs whose values differ by more than the Lipschitz bound.
+    pub position_violations: u64,
+    /// Pairs of footprints a relative step 10^−6 apart (around zero, the
+    /// blend curve's knots and beyond), at a common point.
+    pub footprint_pairs: u64,
+    /// Of those, pairs whose values differ by more than the step allows.
+    pub footprint_violations: u64,
+    /// The largest difference seen in a footprint pair.
+    pub largest_footprint_jump: f64,
+}
+
+/// The discontinuity detector for values that stand for a footprint,
+/// `value(x, width)` (user units, a pattern of scale `scale`):
+/// - in position, at a common random width, pairs a step of 10^−9 to
+///   10^−3 cells across a lattice face, edge or corner, whose values may
+///   differ by at most `lipschitz` times their Euclidean distance plus
+///   `rounding` (a value that is L-Lipschitz in position, as a fractal sum
+///   of 1-Lipschitz F_n with weights at most 1 is);
+/// - in the footprint, at a common random point, widths w and w·(1 + 10^−6)
+///   for w at zero (against 10^−7), at the blend curve's knots 2^(−6 + j/4)
+///   and scattered between 2^−8 and 2^8: a value continuous in the width
+///   with a slope below |v|·10^3 per relative unit changes by less than
+///   `rounding` + 10^−3·(|v| + 1) across such a step; a jump (an octave
+///   dropped while its weight is not yet 0, a mean that differs from the
+///   blend's limit) exceeds it.
+pub fn filtered_continuity<const D: usize>(
+    value: impl Fn([f64; D], f32) -> f32 + Sync,
+    scale: f64,
+    lipschitz: f64,
+    rounding: f64,
+    pairs: usize,
+    seed: u64,
+) -> FilteredContinuity {
+    let parts = chunked(pairs, |range| {
+        let mut r = FilteredContinuity::default();
+        for i in range {
+            let rnd = |j: u64| uniform(seed, i as u64 * 64 + j);
+            // Position: a pair across lattice planes of 1..=D axes.
+            let width = (16.0 * rnd(0) - 8.0).exp2() as f32 * (rnd(1) < 0.9) as u8 as f32;
+            let eps = 10f64.powf(-9.0 + 6.0 * rnd(2));
+            let (mut a, mut b) = ([0.0; D], [0.0; D]);
+            for axis in 0..D {
+                let cell = ((2.0 * rnd(10 + axis as u64) - 1.0) * 200.0).floor();
+                let (u, e) = if axis <= i % D {
+                    (cell, 0.1 + 0.9 * rnd(20 + axis as u64))
+                } else {
+                    (cell + rnd(30 + axis as u64), 2.0 * rnd(20 + axis as u64) - 1.0)
+                };
+                a[axis] = (u - eps * e) / scale;
+                b[axis] = (u + eps * e) / scale;
+            }
+            let distance = a.iter().zip(&b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt();
+            let jump = f64::from(value(a, width) - value(b, width)).abs();
+            r.position_pairs += 1;
+            r.position_violations += (jump.is_nan() || jump > lipschitz * distance + rounding) as u64;
+            // Footprint: around zero, a knot, or anywhere.
+            let x: [f64; D] = std::array::from_fn(|axis| (2.0 * rnd(40 + axis as u64) - 1.0) * 1000.0);
+            let (w, w2) = match i % 3 {
+                0 => (0.0f32, 1e-7f32),
+                1 => {
+                    let w = ((rnd(50) * 49.0).floor() / 4.0 - 6.0).exp2() as f32;
+                    (w, w * (1.0 + 1e-6))
+                }
+                _ => {
+                    let w = (16.0 * rnd(51) - 8.0).exp2() as f32;
+                    (w, w * (1.0 + 1e-6))
+                }
+            };
+            let (v, v2) = (value(x, w), value(x, w2));
+            let jump = f64::from(v - v2).abs();
+            r.footprint_pairs += 1;
+            r.largest_footprint_jump = r.largest_footprint_jump.max(jump);
+            let allowed = rounding + 1e-3 * (f64::from(v.abs()) + 1.0);
+            r.footprint_violations += (jump.is_nan() || jump > allowed) as u64;
+        }
+        r
+    });
+    parts.into_iter().fold(FilteredContinuity::default(), |t, p| FilteredContinuity {
+        position_pairs: t.position_pairs + p.position_pairs,
+        position_violations: t.position_violations + p.position_violations,
+        footprint_pairs: t.footprint_pairs + p.footprint_pairs,
+        footprint_violations: t.footprint_violations + p.footprint_violations,
+        largest_footprint_jump: t.largest_footprint_jump.max(p.largest_footprint_jump),
+    })
+}

@@ -8,6 +8,7 @@
 
 mod border;
 mod cell_hash;
+mod filter;
 mod fuzz_regressions;
 mod minkowski;
 mod oracle;
