@@ -2,17 +2,33 @@
 //! a sphere of crumpled foil and a sphere of reptile hide, shaded in packets
 //! of eight hits, on all cores.
 //!
+//! Each pixel's footprint on the surface it hits comes from ray
+//! differentials, and the textures stand for that footprint
+//! (`worley::filter`): fine octaves, stone colours, mortar lines and stains
+//! fade towards their means where a pixel covers many cells, so the
+//! horizon shows no moiré and costs less.
+//!
 //! ```sh
-//! cargo run --release -p worley-cli --example render_scene -- [WIDTH HEIGHT] [out/scene.png]
+//! cargo run --release -p worley-cli --example render_scene -- [WIDTH HEIGHT] [PATH] [--point] [--spp N]
+//! cargo run --release -p worley-cli --example render_scene -- --campaign [WIDTH HEIGHT] [DIR]
 //! ```
+//!
+//! `--point` point-samples the textures (one sample per pixel unless
+//! `--spp` asks for more, on a stratified jittered grid); `--campaign`
+//! renders the scene and a plane receding to the horizon every way
+//! (point sampling, filtered, 4, 16 and 64 samples per pixel) against a
+//! 256-samples-per-pixel reference, prints the table of error against time
+//! per frame, and writes the plot and the pictures into DIR (default
+//! `out/footprint`).
 
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
+use worley::filter::BlendCurve;
 use worley::perlin::Perlin;
 use worley::texture::{bump, Combination, Fractal, Texture};
-use worley::{Config, SimdBorder};
+use worley::{Config, Outputs, Simd, SimdBorder};
 use worley_cli::picture::{id_colour, to_byte, write_output, Rgb};
 
 /// What a ray hit.
@@ -35,6 +51,18 @@ struct Hit {
 const FOIL: (Vec3, f32) = (Vec3::new(-1.15, 1.0, 3.0), 1.0);
 const HIDE: (Vec3, f32) = (Vec3::new(1.2, 1.0, 2.6), 1.0);
 const SUN: Vec3 = Vec3::new(-0.45, 0.8, -0.4);
+/// Mortar where the border distance is below this (texture units).
+const MORTAR: f32 = 0.035;
+/// The stone's edge is rounded over this distance from its border.
+const BEVEL: f32 = 0.12;
+
+/// What the rays can meet: the floor up to `far`, and the two spheres or
+/// none.
+#[derive(Clone, Copy)]
+struct World {
+    spheres: bool,
+    far: f32,
+}
 
 fn sphere(origin: Vec3, dir: Vec3, (centre, radius): (Vec3, f32)) -> Option<f32> {
     let oc = origin - centre;
@@ -48,26 +76,30 @@ fn sphere(origin: Vec3, dir: Vec3, (centre, radius): (Vec3, f32)) -> Option<f32>
     (t > 1e-3).then_some(t)
 }
 
-fn trace(origin: Vec3, dir: Vec3) -> Hit {
-    let mut hit = Hit { material: Material::Sky, t: f32::INFINITY, point: Vec3::ZERO, normal: Vec3::Y };
-    if dir.y < -1e-4 {
-        let t = -origin.y / dir.y;
-        if t > 1e-3 && t < 60.0 {
-            hit = Hit { material: Material::Floor, t, point: origin + t * dir, normal: Vec3::Y };
+impl World {
+    fn trace(&self, origin: Vec3, dir: Vec3) -> Hit {
+        let mut hit = Hit { material: Material::Sky, t: f32::INFINITY, point: Vec3::ZERO, normal: Vec3::Y };
+        if dir.y < -1e-4 {
+            let t = -origin.y / dir.y;
+            if t > 1e-3 && t < self.far {
+                hit = Hit { material: Material::Floor, t, point: origin + t * dir, normal: Vec3::Y };
+            }
         }
-    }
-    for (shape, material) in [(FOIL, Material::Foil), (HIDE, Material::Hide)] {
-        if let Some(t) = sphere(origin, dir, shape).filter(|&t| t < hit.t) {
-            let point = origin + t * dir;
-            hit = Hit { material, t, point, normal: (point - shape.0) / shape.1 };
+        if self.spheres {
+            for (shape, material) in [(FOIL, Material::Foil), (HIDE, Material::Hide)] {
+                if let Some(t) = sphere(origin, dir, shape).filter(|&t| t < hit.t) {
+                    let point = origin + t * dir;
+                    hit = Hit { material, t, point, normal: (point - shape.0) / shape.1 };
+                }
+            }
         }
+        hit
     }
-    hit
-}
 
-fn in_shadow(point: Vec3) -> bool {
-    let sun = SUN.normalize();
-    sphere(point, sun, FOIL).is_some() || sphere(point, sun, HIDE).is_some()
+    fn in_shadow(&self, point: Vec3) -> bool {
+        let sun = SUN.normalize();
+        self.spheres && (sphere(point, sun, FOIL).is_some() || sphere(point, sun, HIDE).is_some())
+    }
 }
 
 fn sky(dir: Vec3) -> Vec3 {
@@ -75,86 +107,229 @@ fn sky(dir: Vec3) -> Vec3 {
     Vec3::new(0.75, 0.82, 0.9).lerp(Vec3::new(0.3, 0.45, 0.75), t)
 }
 
+/// How a pixel's footprint becomes one width.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Width {
+    /// The side of the square with the footprint's area.
+    Area,
+    /// The footprint's longer axis.
+    Major,
+}
+
+/// A pixel's footprint on the surface its ray hits (world units): how the
+/// hit moves for one pixel along x and along y, and one width for it.
+#[derive(Clone, Copy, Default)]
+struct Footprint {
+    dx: Vec3,
+    dy: Vec3,
+    width: f32,
+}
+
+impl Footprint {
+    /// The footprint's extent along a unit direction of the surface: a
+    /// straight edge across that direction is covered over this distance.
+    fn across(&self, direction: Vec3) -> f32 {
+        self.dx.dot(direction).abs() + self.dy.dot(direction).abs()
+    }
+}
+
+/// How the textures are sampled.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Shading {
+    /// At the hit point.
+    Point,
+    /// Standing for the pixel's footprint.
+    Filtered(Width),
+}
+
 /// The textures, built once and shared by every thread.
 struct Textures {
     /// The flagstones: the distance to the border of the sample's cell
-    /// (even mortar whatever the spacing of the points, where F2 − F1
-    /// widens into wedges between close pairs), its normal for the bevel,
-    /// and the cell's ID for the stone's colour.
+    /// (even mortar whatever the spacing of the points), its normal for the
+    /// bevel, and the cell's ID for the stone's colour.
     stones: SimdBorder<3>,
     /// Fractal F1, five octaves: the foil's crumple.
     crumple: Texture<3, 1>,
     /// Fractal F1, three octaves: the hide's scales.
     scales: Texture<3, 1>,
     stain: Perlin,
+    /// Blend curves of the floor's fields, in floor texture units: the
+    /// stone's identity, the mortar (border distance below [`MORTAR`]) and
+    /// the stains.
+    identity: BlendCurve,
+    mortar: BlendCurve,
+    stains: BlendCurve,
+    /// The bevel's height, 1 − min(border / [`BEVEL`], 1), whose curve
+    /// fades the bevel's bump.
+    bevel: BlendCurve,
+    /// The mean stone colour (each cell's colour weighs by its area).
+    stone_mean: Vec3,
 }
 
 impl Textures {
     fn new() -> Self {
         let config = Config::default();
+        let stones = SimdBorder::new(config).expect("a valid configuration");
+        let ids = Simd::<3, 1>::new(config, Outputs::Ids).expect("a valid configuration");
+        let stain = Perlin::new(3);
+        let identity = BlendCurve::measure_identity(|p: &[[f64; 3]; 8]| ids.evaluate8(p).id[0].to_array(), 1);
+        let mortar = BlendCurve::measure(
+            |p: &[[f64; 3]; 8]| stones.border8(p).distance.to_array().map(|b| f32::from(u8::from(b < MORTAR))),
+            2,
+        );
+        let stains = BlendCurve::measure(|p: &[[f64; 3]; 8]| stain.turbulence8(&stain_at(p), 4).to_array(), 3);
+        let bevel = BlendCurve::measure(
+            |p: &[[f64; 3]; 8]| stones.border8(p).distance.to_array().map(|b| 1.0 - (b / BEVEL).min(1.0)),
+            4,
+        );
+        let samples = 1 << 14;
+        let mut stone_mean = Vec3::ZERO;
+        for i in 0..samples / 8 {
+            let p: [[f64; 3]; 8] = std::array::from_fn(|k| {
+                std::array::from_fn(|a| 2000.0 * worley::math::uniform(4, ((i * 8 + k) * 3 + a) as u64) - 1000.0)
+            });
+            for id in ids.evaluate8(&p).id[0].to_array() {
+                stone_mean += Vec3::from(id_colour(id));
+            }
+        }
+        let crumple = Texture::new(config, Combination::f(1), Fractal::octaves(5), None).expect("valid");
+        let scales = Texture::new(config, Combination::f(1), Fractal { octaves: 3, lacunarity: 2.0, gain: 0.35 }, None)
+            .expect("valid");
+        // Measured now rather than inside the first frame.
+        let _ = (crumple.blend_curve(), scales.blend_curve());
         Textures {
-            stones: SimdBorder::new(config).expect("a valid configuration"),
-            crumple: Texture::new(config, Combination::f(1), Fractal::octaves(5), None).expect("valid"),
-            scales: Texture::new(config, Combination::f(1), Fractal { octaves: 3, lacunarity: 2.0, gain: 0.35 }, None)
-                .expect("valid"),
-            stain: Perlin::new(3),
+            stones,
+            crumple,
+            scales,
+            stain,
+            identity,
+            mortar,
+            stains,
+            bevel,
+            stone_mean: stone_mean / samples as f32,
         }
     }
 
-    /// Shades eight hits: each material's texture is evaluated once for all
-    /// eight lanes (lanes of other materials are evaluated and ignored, which
-    /// costs less than splitting the packet).
-    fn shade8(&self, hits: &[Hit; 8], dirs: &[Vec3; 8]) -> [Vec3; 8] {
+    /// Shades eight hits with their footprints (world units): each
+    /// material's texture is evaluated once for all eight lanes (lanes of
+    /// other materials are evaluated and ignored, which costs less than
+    /// splitting the packet).
+    fn shade8(
+        &self,
+        world: &World,
+        hits: &[Hit; 8],
+        dirs: &[Vec3; 8],
+        footprints: &[Footprint; 8],
+        shading: Shading,
+    ) -> [Vec3; 8] {
+        let filtered = shading != Shading::Point;
         let mut colour = [Vec3::ZERO; 8];
         let has = |m: Material| hits.iter().any(|h| h.material == m);
         let sun = SUN.normalize();
         let light = |p: Vec3, n: Vec3| {
-            let direct = if in_shadow(p) { 0.0 } else { n.dot(sun).max(0.0) };
+            let direct = if world.in_shadow(p) { 0.0 } else { n.dot(sun).max(0.0) };
             0.22 + 0.85 * direct
         };
+        // A texture's footprint: the world width times its scale, where
+        // filtered; a point otherwise.
+        let footprint = |scale: f32| footprints.map(|f| if filtered { f.width * scale } else { 0.0 });
         if has(Material::Floor) {
-            // Floor texture coordinates: 2.2 user units per metre.
+            // Floor texture coordinates: 2.2 units per metre.
             let at: [[f64; 3]; 8] = hits.map(|h| [h.point.x as f64 * 2.2, h.point.z as f64 * 2.2, 0.5]);
-            let border = self.stones.border8(&at);
-            let stains = self.stain.turbulence8(&at.map(|p| [p[0] * 1.5, p[1] * 1.5, 0.3]), 4).to_array();
-            let (edge, id) = (border.distance.to_array(), border.feature.to_array());
-            let (gx, gy) = (border.normal[0].to_array(), border.normal[1].to_array());
-            for i in (0..8).filter(|&i| hits[i].material == Material::Floor) {
-                let rim = (edge[i] / 0.12).min(1.0);
+            let w = footprint(2.2);
+            let floor = |i: usize| hits[i].material == Material::Floor;
+            let (a_id, a_mortar) = (self.identity.weight8(w), self.mortar.weight8(w));
+            let a_stain = self.stains.weight8(w.map(|v| v * 1.5));
+            let a_bevel = self.bevel.weight8(w);
+            // Where no floor lane resolves the stones, their mean stands
+            // for them without evaluation.
+            let border = (0..8)
+                .any(|i| floor(i) && (a_id[i] > 0.0 || a_mortar[i] > 0.0 || a_bevel[i] > 0.0))
+                .then(|| self.stones.border8(&at));
+            let stains = (0..8)
+                .any(|i| floor(i) && a_stain[i] > 0.0)
+                .then(|| self.stain.turbulence8(&stain_at(&at), 4).to_array());
+            for i in (0..8).filter(|&i| floor(i)) {
+                let (edge, id, normal) = match &border {
+                    Some(b) => (
+                        b.distance.to_array()[i],
+                        b.feature.to_array()[i],
+                        [b.normal[0].to_array()[i], b.normal[1].to_array()[i]],
+                    ),
+                    None => (f32::INFINITY, worley::INVALID_ID, [0.0; 2]),
+                };
+                // The footprint's extent across the border (texture units):
+                // the mortar's edges and the bevel's ridge are straight lines
+                // at the pixel's scale.
+                let across = 2.2 * footprints[i].across(Vec3::new(normal[0], 0.0, normal[1]));
+                // The mortar's cover of the footprint: a straight edge under
+                // a box filter (the border distance rises at one per unit),
+                // exact while the footprint stays in the sample's cell and
+                // its neighbour's, so it blends towards the mortar's share of
+                // the floor as the identity's weight falls.
+                let mortar = if filtered {
+                    let cover = if across > 0.0 {
+                        ((MORTAR - edge) / across + 0.5).clamp(0.0, 1.0)
+                    } else {
+                        f32::from(u8::from(edge < MORTAR))
+                    };
+                    blend(cover, a_id[i], self.mortar.mean())
+                } else {
+                    f32::from(u8::from(edge < MORTAR))
+                };
+                let stone = if filtered && a_id[i] < 1.0 {
+                    let own = if a_id[i] > 0.0 { Vec3::from(id_colour(id)) } else { Vec3::ZERO };
+                    own * a_id[i] + self.stone_mean * (1.0 - a_id[i])
+                } else {
+                    Vec3::from(id_colour(id))
+                };
+                let stain = match stains {
+                    Some(s) if filtered => blend(s[i], a_stain[i], self.stains.mean()),
+                    Some(s) => s[i],
+                    None => self.stains.mean(),
+                };
                 // The stone's edge is rounded down into the mortar: the
                 // border distance rises at one per unit along its normal
-                // (times 2.2 texture units per metre).
-                let g = Vec3::new(gx[i], 0.0, gy[i]) * (1.0 - rim) * 2.0 * 2.2;
-                let n = bump(Vec3::Y, g, 0.35);
-                let base = if edge[i] < 0.035 {
-                    Vec3::splat(0.28)
+                // (times 2.2 texture units per metre); the bevel fades with
+                // its own weight.
+                let rim = (edge / BEVEL).min(1.0);
+                let fade = if filtered { a_bevel[i] } else { 1.0 };
+                let g = Vec3::new(normal[0], 0.0, normal[1]) * (1.0 - rim) * 2.0 * 2.2 * fade;
+                let base = Vec3::splat(0.28) * mortar + stone * 0.8 * (1.0 - 0.5 * stain.min(1.0)) * (1.0 - mortar);
+                // The slope flips across the border's ridge: a footprint
+                // straddling it sees this side's flank over its share and the
+                // neighbour's, mirrored, over the rest.
+                let own = if filtered && across > 0.0 { (edge / across + 0.5).min(1.0) } else { 1.0 };
+                let lit = light(hits[i].point, bump(Vec3::Y, g, 0.35));
+                let lit = if own < 1.0 {
+                    own * lit + (1.0 - own) * light(hits[i].point, bump(Vec3::Y, -g, 0.35))
                 } else {
-                    Vec3::from(id_colour(id[i])) * 0.8 * (1.0 - 0.5 * stains[i].min(1.0))
+                    lit
                 };
-                colour[i] = base * light(hits[i].point, n);
+                colour[i] = base * lit;
             }
         }
         if has(Material::Foil) {
             let at: [[f64; 3]; 8] = hits.map(|h| (h.point * 3.0).to_array().map(f64::from));
-            let g = self.crumple.gradient8(&at);
+            let g = self.crumple.filtered_gradient8(&at, footprint(3.0));
             let grad: [[f32; 8]; 3] = g.gradient.map(|v| v.to_array());
             for i in (0..8).filter(|&i| hits[i].material == Material::Foil) {
                 let n = bump(hits[i].normal, Vec3::new(grad[0][i], grad[1][i], grad[2][i]), 0.12);
                 let reflected = dirs[i] - 2.0 * dirs[i].dot(n) * n;
-                let seen = trace(hits[i].point + 1e-3 * n, reflected);
+                let seen = world.trace(hits[i].point + 1e-3 * n, reflected);
                 let env = match seen.material {
                     Material::Sky => sky(reflected),
                     Material::Floor => Vec3::new(0.35, 0.33, 0.3),
                     _ => Vec3::new(0.45, 0.4, 0.3),
                 };
                 let half = (sun - dirs[i]).normalize();
-                let spec = if in_shadow(hits[i].point) { 0.0 } else { n.dot(half).max(0.0).powf(60.0) };
+                let spec = if world.in_shadow(hits[i].point) { 0.0 } else { n.dot(half).max(0.0).powf(60.0) };
                 colour[i] = Vec3::new(0.85, 0.87, 0.9) * env + Vec3::splat(spec);
             }
         }
         if has(Material::Hide) {
             let at: [[f64; 3]; 8] = hits.map(|h| (h.point * 6.0).to_array().map(f64::from));
-            let g = self.scales.gradient8(&at);
+            let g = self.scales.filtered_gradient8(&at, footprint(6.0));
             let (value, grad) = (g.value.to_array(), g.gradient.map(|v| v.to_array()));
             for i in (0..8).filter(|&i| hits[i].material == Material::Hide) {
                 let n = bump(hits[i].normal, Vec3::new(grad[0][i], grad[1][i], grad[2][i]), 0.05);
@@ -170,52 +345,406 @@ impl Textures {
     }
 }
 
+/// The stains' coordinates from the floor's.
+fn stain_at(p: &[[f64; 3]; 8]) -> [[f64; 3]; 8] {
+    p.map(|q| [q[0] * 1.5, q[1] * 1.5, 0.3])
+}
+
+/// a·v + (1 − a)·mean, and v itself at a = 1.
+fn blend(v: f32, a: f32, mean: f32) -> f32 {
+    if a == 1.0 {
+        v
+    } else if a == 0.0 {
+        mean
+    } else {
+        a * v + (1.0 - a) * mean
+    }
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy)]
+struct Camera {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    /// Half the vertical field of view's tangent.
+    fov: f32,
+    width: usize,
+    height: usize,
+}
+
+impl Camera {
+    fn looking(eye: Vec3, at: Vec3, width: usize, height: usize) -> Self {
+        let forward = (at - eye).normalize();
+        let right = forward.cross(Vec3::Y).normalize() * -1.0;
+        let up = right.cross(forward) * -1.0;
+        Camera { eye, forward, right, up, fov: 0.75, width, height }
+    }
+
+    /// The unnormalised ray direction through image position (x, y) in
+    /// pixels: forward + u·right + v·up.
+    fn ray(&self, x: f32, y: f32) -> Vec3 {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let u = (2.0 * x / w - 1.0) * self.fov * w / h;
+        let v = (1.0 - 2.0 * y / h) * self.fov;
+        self.forward + u * self.right + v * self.up
+    }
+
+    /// The footprint's width on the surface a ray hits (ray differentials:
+    /// how the hit moves on the surface's tangent plane for one pixel along
+    /// x and along y).
+    fn footprint(&self, ray: Vec3, hit: &Hit, width: Width) -> Footprint {
+        if hit.material == Material::Sky {
+            return Footprint::default();
+        }
+        // P = eye + s·D on the plane through the hit with the hit's normal;
+        // ∂P/∂u = s·(R − (R·n)/(D·n)·D), and one pixel is du = 2·fov/height.
+        let s = hit.t / ray.length();
+        let n = hit.normal;
+        let dn = ray.dot(n);
+        let pixel = 2.0 * self.fov / self.height as f32;
+        let along = |r: Vec3| s * (r - r.dot(n) / dn * ray) * pixel;
+        let (dx, dy) = (along(self.right), along(self.up));
+        let w = match width {
+            Width::Area => dx.cross(dy).length().sqrt(),
+            Width::Major => dx.length().max(dy.length()),
+        };
+        if w.is_finite() {
+            Footprint { dx, dy, width: w }
+        } else {
+            Footprint::default()
+        }
+    }
+}
+
+/// Renders linear colours: `spp` samples per pixel on a stratified jittered
+/// grid (a square number), or the pixel centre for one.
+fn render(textures: &Textures, world: &World, camera: &Camera, shading: Shading, spp: usize) -> Vec<Vec3> {
+    let side = (spp as f64).sqrt().round() as usize;
+    let mut image = vec![Vec3::ZERO; camera.width * camera.height];
+    image.par_chunks_mut(camera.width).enumerate().for_each(|(y, row)| {
+        // The row's samples, pixel after pixel.
+        let samples: Vec<(usize, f32, f32)> = (0..camera.width)
+            .flat_map(|x| {
+                (0..side * side).map(move |k| {
+                    if side == 1 {
+                        return (x, x as f32 + 0.5, y as f32 + 0.5);
+                    }
+                    let counter = (((y * camera.width + x) * side * side + k) * 2) as u64;
+                    let jx = worley::math::uniform(17, counter) as f32;
+                    let jy = worley::math::uniform(17, counter + 1) as f32;
+                    let (sx, sy) = ((k % side) as f32, (k / side) as f32);
+                    (x, x as f32 + (sx + jx) / side as f32, y as f32 + (sy + jy) / side as f32)
+                })
+            })
+            .collect();
+        for packet in samples.chunks(8) {
+            let rays: [Vec3; 8] = std::array::from_fn(|i| {
+                let (_, sx, sy) = packet[i.min(packet.len() - 1)];
+                camera.ray(sx, sy)
+            });
+            let dirs = rays.map(Vec3::normalize);
+            let hits = dirs.map(|d| world.trace(camera.eye, d));
+            let width = match shading {
+                Shading::Filtered(w) => w,
+                Shading::Point => Width::Area,
+            };
+            let footprints: [Footprint; 8] = std::array::from_fn(|i| camera.footprint(rays[i], &hits[i], width));
+            let colour = textures.shade8(world, &hits, &dirs, &footprints, shading);
+            for (&(x, _, _), c) in packet.iter().zip(colour) {
+                row[x] += c / (side * side) as f32;
+            }
+        }
+    });
+    image
+}
+
+/// A simple tone curve and gamma 2.2, in [0, 1].
+fn tone(c: Vec3) -> [f32; 3] {
+    let c = c / (c + Vec3::ONE) * 1.5;
+    c.to_array().map(|v| v.clamp(0.0, 1.0).powf(1.0 / 2.2))
+}
+
+fn to_rgb(camera: &Camera, image: &[Vec3]) -> Rgb {
+    Rgb { width: camera.width, height: camera.height, pixels: image.iter().map(|&c| tone(c).map(to_byte)).collect() }
+}
+
+fn write(path: &std::path::Path, bytes: &[u8]) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    write_output(path, bytes)
+}
+
+/// The scene's camera, and the plane's: low over the floor, the horizon
+/// across the middle of the frame.
+fn views(width: usize, height: usize) -> [(&'static str, World, Camera); 2] {
+    [
+        (
+            "scene",
+            World { spheres: true, far: 60.0 },
+            Camera::looking(Vec3::new(0.0, 1.45, -1.4), Vec3::new(0.0, 0.8, 2.8), width, height),
+        ),
+        (
+            "plane",
+            World { spheres: false, far: 400.0 },
+            Camera::looking(Vec3::new(0.0, 0.9, 0.0), Vec3::new(0.0, 0.35, 6.0), width, height),
+        ),
+    ]
+}
+
 fn main() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut flag = |name: &str| args.iter().position(|a| a == name).map(|i| args.remove(i)).is_some();
+    let point = flag("--point");
+    let campaign = flag("--campaign");
+    let spp = match args.iter().position(|a| a == "--spp") {
+        Some(i) => {
+            let n = args.get(i + 1).and_then(|s| s.parse::<usize>().ok()).filter(|&n| {
+                let side = (n as f64).sqrt().round() as usize;
+                (1..=1024).contains(&n) && side * side == n
+            });
+            args.drain(i..(i + 2).min(args.len()));
+            n.ok_or("--spp takes a square number of samples per pixel from 1 to 1024")?
+        }
+        None => 1,
+    };
     let number = |i: usize, default: usize| -> Result<usize, String> {
         args.get(i)
             .map_or(Ok(default), |s| s.parse().map_err(|_| format!("{s:?} is not a size: use WIDTH HEIGHT [PATH]")))
     };
-    let (width, height) = (number(0, 1280)?, number(1, 720)?);
-    let path = args.get(2).cloned().unwrap_or_else(|| "out/scene.png".into());
+    let (default_w, default_h) = if campaign { (640, 360) } else { (1280, 720) };
+    let (width, height) = (number(0, default_w)?, number(1, default_h)?);
     if width == 0 || height == 0 || width > 16384 || height > 16384 {
         return Err("use a size from 1x1 to 16384x16384".into());
     }
+    if campaign {
+        let dir = args.get(2).cloned().unwrap_or_else(|| "out/footprint".into());
+        return run_campaign(width, height, std::path::Path::new(&dir));
+    }
+    let path = args.get(2).cloned().unwrap_or_else(|| "out/scene.png".into());
     let started = Instant::now();
     let textures = Textures::new();
-    let eye = Vec3::new(0.0, 1.45, -1.4);
-    let forward = (Vec3::new(0.0, 0.8, 2.8) - eye).normalize();
-    let right = forward.cross(Vec3::Y).normalize() * -1.0;
-    let up = right.cross(forward) * -1.0;
-    let fov = 0.75f32;
-    let mut pixels = vec![[0u8; 3]; width * height];
-    pixels.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x0, packet) in row.chunks_mut(8).enumerate().map(|(c, p)| (c * 8, p)) {
-            let dirs: [Vec3; 8] = std::array::from_fn(|i| {
-                let x = (x0 + i.min(packet.len() - 1)) as f32;
-                let u = (2.0 * (x + 0.5) / width as f32 - 1.0) * fov * width as f32 / height as f32;
-                let v = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * fov;
-                (forward + u * right + v * up).normalize()
-            });
-            let hits = dirs.map(|d| trace(eye, d));
-            let colour = textures.shade8(&hits, &dirs);
-            for (p, c) in packet.iter_mut().zip(colour) {
-                // A simple tone curve and gamma 2.2.
-                let c = c / (c + Vec3::ONE) * 1.5;
-                *p = c.to_array().map(|v| to_byte(v.max(0.0).powf(1.0 / 2.2)));
-            }
-        }
-    });
+    let built = started.elapsed().as_secs_f64();
+    let [(_, world, camera), _] = views(width, height);
+    let shading = if point || spp > 1 { Shading::Point } else { Shading::Filtered(Width::Area) };
+    let image = render(&textures, &world, &camera, shading, spp);
     let elapsed = started.elapsed().as_secs_f64();
-    let image = Rgb { width, height, pixels };
-    if let Some(dir) = std::path::Path::new(&path).parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    }
-    write_output(std::path::Path::new(&path), &image.to_png()?)?;
+    write(std::path::Path::new(&path), &to_rgb(&camera, &image).to_png()?)?;
     println!(
-        "rendered {width}x{height} in {elapsed:.2} s on {} threads ({:.2} M pixels/s); wrote {path}",
+        "rendered {width}x{height} ({}, {spp} sample(s) per pixel) in {elapsed:.2} s (textures built in {built:.2} s) \
+         on {} threads ({:.2} M pixels/s); wrote {path}",
+        if shading == Shading::Point { "point-sampled textures" } else { "filtered textures" },
         rayon::current_num_threads(),
-        (width * height) as f64 / elapsed / 1e6
+        (width * height) as f64 / (elapsed - built) / 1e6
     );
     Ok(())
+}
+
+/// One way of rendering in the campaign.
+struct Method {
+    name: &'static str,
+    shading: Shading,
+    spp: usize,
+}
+
+/// What a method's frame measured.
+struct Measured {
+    seconds: f64,
+    rms: f64,
+    floor_rms: f64,
+    high: f64,
+}
+
+/// Error of a frame against the reference, in tone-mapped [0, 1] values:
+/// RMS over every pixel and channel, over the pixels whose every reference
+/// sample met the floor (texture alone, no edges of geometry), and the
+/// RMS of the error's high frequencies (the error minus its 5 × 5 box
+/// average: moiré and salt-and-pepper noise, not a smooth bias).
+fn errors(image: &[Vec3], reference: &[Vec3], floor_only: &[bool], width: usize, height: usize) -> (f64, f64, f64) {
+    let diff: Vec<[f64; 3]> = image
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| {
+            let (a, b) = (tone(*a), tone(*b));
+            std::array::from_fn(|c| f64::from(a[c] - b[c]))
+        })
+        .collect();
+    let sq = |d: &[f64; 3]| d.iter().map(|v| v * v).sum::<f64>() / 3.0;
+    let rms = (diff.iter().map(sq).sum::<f64>() / diff.len() as f64).sqrt();
+    let (mut fs, mut fc) = (0.0, 0usize);
+    for (d, &f) in diff.iter().zip(floor_only) {
+        if f {
+            fs += sq(d);
+            fc += 1;
+        }
+    }
+    let mut high = 0.0;
+    for y in 0..height {
+        for x in 0..width {
+            let mut mean = [0.0; 3];
+            let mut count = 0.0;
+            for yy in y.saturating_sub(2)..(y + 3).min(height) {
+                for xx in x.saturating_sub(2)..(x + 3).min(width) {
+                    for c in 0..3 {
+                        mean[c] += diff[yy * width + xx][c];
+                    }
+                    count += 1.0;
+                }
+            }
+            let d = diff[y * width + x];
+            high += (0..3).map(|c| (d[c] - mean[c] / count).powi(2)).sum::<f64>() / 3.0;
+        }
+    }
+    (rms, (fs / fc.max(1) as f64).sqrt(), (high / (width * height) as f64).sqrt())
+}
+
+fn run_campaign(width: usize, height: usize, dir: &std::path::Path) -> Result<(), String> {
+    let started = Instant::now();
+    let textures = Textures::new();
+    println!(
+        "textures and blend curves built in {:.2} s; {width}x{height}, {} threads",
+        started.elapsed().as_secs_f64(),
+        rayon::current_num_threads()
+    );
+    let methods = [
+        Method { name: "(a) point sampling, 1 spp", shading: Shading::Point, spp: 1 },
+        Method { name: "(b) filtered, 1 spp (area width)", shading: Shading::Filtered(Width::Area), spp: 1 },
+        Method { name: "(b') filtered, 1 spp (major-axis width)", shading: Shading::Filtered(Width::Major), spp: 1 },
+        Method { name: "(c) point sampling, 4 spp", shading: Shading::Point, spp: 4 },
+        Method { name: "(c) point sampling, 16 spp", shading: Shading::Point, spp: 16 },
+        Method { name: "(c) point sampling, 64 spp", shading: Shading::Point, spp: 64 },
+    ];
+    let mut table = String::from(
+        "| view | method | ms per frame | RMS error | RMS error, floor pixels | high-frequency RMS error |\n|---|---|---|---|---|---|\n",
+    );
+    let mut plotted: Vec<(&str, &str, f64, f64)> = Vec::new();
+    for (view, world, camera) in views(width, height) {
+        let t = Instant::now();
+        let reference = render(&textures, &world, &camera, Shading::Point, 256);
+        let reference_ms = t.elapsed().as_secs_f64() * 1e3;
+        // Pixels whose reference samples all met the floor: the reference at
+        // 256 samples, with the floor's colour replaced by a flag.
+        let floor_only: Vec<bool> = floor_pixels(&world, &camera);
+        write(&dir.join(format!("{view}_reference.png")), &to_rgb(&camera, &reference).to_png()?)?;
+        for m in &methods {
+            // Cheap frames: the median of five; the others once.
+            let runs = if m.spp <= 4 { 5 } else { 1 };
+            let mut times = Vec::new();
+            let mut image = Vec::new();
+            for _ in 0..runs {
+                let t = Instant::now();
+                image = render(&textures, &world, &camera, m.shading, m.spp);
+                times.push(t.elapsed().as_secs_f64());
+            }
+            times.sort_by(f64::total_cmp);
+            let seconds = times[times.len() / 2];
+            let (rms, floor_rms, high) = errors(&image, &reference, &floor_only, width, height);
+            let r = Measured { seconds, rms, floor_rms, high };
+            table += &format!(
+                "| {view} | {} | {:.1} | {:.4} | {:.4} | {:.4} |\n",
+                m.name,
+                r.seconds * 1e3,
+                r.rms,
+                r.floor_rms,
+                r.high
+            );
+            plotted.push((view, m.name, r.seconds * 1e3, r.rms));
+            if m.spp == 1 {
+                let tag = match m.shading {
+                    Shading::Point => "point",
+                    Shading::Filtered(Width::Area) => "filtered",
+                    Shading::Filtered(Width::Major) => "filtered_major",
+                };
+                write(&dir.join(format!("{view}_{tag}.png")), &to_rgb(&camera, &image).to_png()?)?;
+                // The error, eight times brighter.
+                let error = Rgb {
+                    width,
+                    height,
+                    pixels: image
+                        .iter()
+                        .zip(&reference)
+                        .map(|(a, b)| {
+                            let (a, b) = (tone(*a), tone(*b));
+                            std::array::from_fn(|c| to_byte(8.0 * (a[c] - b[c]).abs()))
+                        })
+                        .collect(),
+                };
+                write(&dir.join(format!("{view}_{tag}_error.png")), &error.to_png()?)?;
+            }
+        }
+        table += &format!("| {view} | reference, point sampling, 256 spp | {reference_ms:.1} | 0 | 0 | 0 |\n");
+    }
+    println!("{table}");
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    write(&dir.join("table.md"), table.as_bytes())?;
+    write(&dir.join("error_against_time.svg"), plot(&plotted)?.as_bytes())?;
+    println!("wrote the pictures, table.md and error_against_time.svg into {}", dir.display());
+    Ok(())
+}
+
+/// Per pixel, whether all 256 reference samples meet the floor.
+fn floor_pixels(world: &World, camera: &Camera) -> Vec<bool> {
+    let side = 16;
+    (0..camera.width * camera.height)
+        .into_par_iter()
+        .map(|p| {
+            let (x, y) = (p % camera.width, p / camera.width);
+            (0..side * side).all(|k| {
+                let (sx, sy) = ((k % side) as f32 + 0.5, (k / side) as f32 + 0.5);
+                let d = camera.ray(x as f32 + sx / side as f32, y as f32 + sy / side as f32).normalize();
+                world.trace(camera.eye, d).material == Material::Floor
+            })
+        })
+        .collect()
+}
+
+/// RMS error against milliseconds per frame, log-log, one series per view.
+fn plot(points: &[(&str, &str, f64, f64)]) -> Result<String, String> {
+    use plotters::prelude::*;
+    let fail = |e: &dyn std::fmt::Display| format!("cannot draw the plot: {e}");
+    let (x_lo, x_hi) = points.iter().fold((f64::MAX, 0f64), |(l, h), p| (l.min(p.2), h.max(p.2)));
+    let (y_lo, y_hi) = points.iter().fold((f64::MAX, 0f64), |(l, h), p| (l.min(p.3), h.max(p.3)));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (820, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Error against the 256-spp reference, by time per frame", ("sans-serif", 16))
+            .margin(14)
+            .x_label_area_size(44)
+            .y_label_area_size(60)
+            .build_cartesian_2d((x_lo / 1.5..x_hi * 1.5).log_scale(), (y_lo / 1.5..y_hi * 1.5).log_scale())
+            .map_err(|e| fail(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("milliseconds per frame")
+            .y_desc("RMS error (tone-mapped, 0..1)")
+            .draw()
+            .map_err(|e| fail(&e))?;
+        for (view, colour) in [("scene", RGBColor(36, 113, 163)), ("plane", RGBColor(192, 57, 43))] {
+            let series: Vec<_> = points.iter().filter(|p| p.0 == view).collect();
+            chart
+                .draw_series(series.iter().map(|p| Circle::new((p.2, p.3), 5, colour.filled())))
+                .map_err(|e| fail(&e))?
+                .label(view)
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+            chart
+                .draw_series(series.iter().map(|p| {
+                    let short = p.1.split(',').take(2).collect::<Vec<_>>().join(",");
+                    Text::new(format!(" {short}"), (p.2, p.3), ("sans-serif", 11).into_font())
+                }))
+                .map_err(|e| fail(&e))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE)
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| fail(&e))?;
+        root.present().map_err(|e| fail(&e))?;
+    }
+    Ok(svg)
 }

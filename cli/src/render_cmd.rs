@@ -67,6 +67,12 @@ pub struct RenderArgs {
     /// Bump height per unit of value (input units), for --shade bump.
     #[arg(long, default_value_t = 0.6)]
     pub strength: f32,
+    /// Let each pixel's value (and bump) stand for the pixel's footprint, a
+    /// square of one pixel's width in input units, instead of its centre:
+    /// no aliasing where a pixel covers many cells, and octaves finer than
+    /// a pixel are not evaluated (see `worley::filter`).
+    #[arg(long)]
+    pub filtered: bool,
     /// Fractal octaves (1: the plain combination).
     #[arg(long, default_value_t = 1)]
     pub octaves: u32,
@@ -185,7 +191,7 @@ pub fn render_combo(args: &RenderArgs, combo: &Combination) -> Result<(Vec<f32>,
             Some((lo, hi)) => Range { lo: lo as f32, hi: hi as f32 },
             None => texture.measure_range(100_000, 1),
         };
-        let (values, image) = render::render(&texture, &args.view(), args.shading(), range)?;
+        let (values, image) = render::render(&texture, &args.view(), args.shading(), range, args.filtered)?;
         Ok((values, image, range))
     }
     let order = combo.order().max(if args.shade == ShadeArg::Flagstones { 2 } else { 1 });
@@ -338,6 +344,7 @@ pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathB
         range: None,
         random_combos: None,
         combo_seed: 1,
+        filtered: false,
     };
     let with = |f: &dyn Fn(&mut RenderArgs)| {
         let mut a = base.clone();

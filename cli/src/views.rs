@@ -66,7 +66,9 @@ pub enum Shading {
 }
 
 /// The texture's raw values at the view's pixels (row-major, top row first)
-/// and the shaded image.
+/// and the shaded image. With `filtered`, each pixel's value and bump stand
+/// for its footprint, a square of the grid's step
+/// ([`Texture::filtered_grid`]); the flagstones stay point-sampled.
 ///
 /// # Errors
 /// An image with no pixels, or one too large to address.
@@ -75,17 +77,19 @@ pub fn render<const D: usize, const N: usize>(
     view: &View,
     shading: Shading,
     range: Range,
+    filtered: bool,
 ) -> Result<(Vec<f32>, Rgb), String> {
     let grid = view.grid::<D>();
     let n = grid.len().filter(|&n| n > 0 && n <= 1 << 28).ok_or("the image must have 1 to 2^28 pixels")?;
+    let footprint = if filtered { grid.step[0] as f32 } else { 0.0 };
     let mut values = vec![0f32; n];
-    texture.values_grid(&grid, &mut values).map_err(|e| e.to_string())?;
+    texture.filtered_grid(&grid, footprint, &mut values).map_err(|e| e.to_string())?;
     let pixels = match shading {
         Shading::Colour(map) => values.iter().map(|&v| map.colour(range.remap(v))).collect(),
         Shading::Bump { strength, map } => {
             let light = glam::Vec3::new(-0.5, -0.6, 0.9).normalize();
             per_block(&grid, n, |block| {
-                let g = texture.gradient8(block);
+                let g = texture.filtered_gradient8(block, [footprint; 8]);
                 let (gx, gy) = (g.gradient[0].to_array(), g.gradient[1].to_array());
                 std::array::from_fn(|i| {
                     let normal = bump(glam::Vec3::Z, glam::Vec3::new(gx[i], gy[i], 0.0), strength);
