@@ -208,6 +208,71 @@ impl BlendCurve {
     }
 }
 
+/// The share of a footprint that lies in each of a sample's N nearest
+/// cells, from Euclidean F1..FN with their deltas: what a cell's colour
+/// keyed on its feature ID should be weighed by, where a point sample gives
+/// F1's cell everything.
+///
+/// Neighbour k's share is the part of a footprint of side w beyond the
+/// bisector plane between F1's point and F_k's: ½ − b_k / w, clamped to
+/// [0, 1] (a box filter across a straight edge), with b_k = (F_k² − F1²) /
+/// (2·|p_k − p₁|) the sample's distance to that plane. F1's cell keeps the
+/// rest; where the shares add up to more than 1 (a footprint over a corner
+/// where the half-spaces overlap) they are scaled to sum to 1. It is an
+/// approximation that treats each bisector as a whole plane and sees no
+/// cell beyond the N-th point, so it serves footprints up to about a cell;
+/// beyond, blend it towards the mean colour with
+/// [`BlendCurve::measure_identity`]'s weight.
+///
+/// A zero width puts everything in F1's cell; a NaN or negative width or a
+/// NaN delta (bad input) gives NaN shares. Lane i of the result's entry k
+/// is F_{k+1}'s share.
+///
+/// ```
+/// use worley::filter::cell_cover8;
+/// use worley::{Config, Outputs, Simd};
+/// let cells = Simd::<2, 3>::new(Config { order: 3, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+/// let f = cells.evaluate8(&[[0.3, 0.8]; 8]);
+/// let share = cell_cover8(&f, [0.0, 0.5, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0]);
+/// assert_eq!((share[0][0], share[1][0]), (1.0, 0.0));
+/// let total: f32 = share.iter().map(|s| s[2]).sum();
+/// assert!((total - 1.0).abs() < 1e-6);
+/// ```
+pub fn cell_cover8<const D: usize, const N: usize>(
+    features: &crate::simd::Features8<D, N>,
+    width: [f32; 8],
+) -> [[f32; 8]; N] {
+    let distance = features.distance.map(|v| v.to_array());
+    let delta = features.delta.map(|d| d.map(|v| v.to_array()));
+    let mut share = [[0f32; 8]; N];
+    for i in 0..8 {
+        let w = width[i];
+        if w.is_nan() || w < 0.0 || (0..N).any(|k| (0..D).any(|a| delta[k][a][i].is_nan())) {
+            share.iter_mut().for_each(|s| s[i] = f32::NAN);
+            continue;
+        }
+        let mut others = 0.0f32;
+        for k in 1..N {
+            if w == 0.0 {
+                break;
+            }
+            // p_k − p₁ = δ₁ − δ_k (deltas are sample − point).
+            let gap = (0..D).map(|a| (delta[0][a][i] - delta[k][a][i]).powi(2)).sum::<f32>().sqrt();
+            let b = (distance[k][i] * distance[k][i] - distance[0][i] * distance[0][i]) / (2.0 * gap);
+            let c = if b.is_finite() { (0.5 - b / w).clamp(0.0, 1.0) } else { 0.0 };
+            share[k][i] = c;
+            others += c;
+        }
+        if others > 1.0 {
+            (1..N).for_each(|k| share[k][i] /= others);
+            share[0][i] = 0.0;
+        } else {
+            share[0][i] = 1.0 - others;
+        }
+    }
+    share
+}
+
 /// Knot j's width, 2^(−6 + j/4).
 fn knot_width(j: usize) -> f64 {
     f64::from(FIRST + j as f32 / PER_OCTAVE).exp2()

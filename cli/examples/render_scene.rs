@@ -25,7 +25,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
-use worley::filter::BlendCurve;
+use worley::filter::{cell_cover8, BlendCurve};
 use worley::perlin::Perlin;
 use worley::texture::{bump, Combination, Fractal, Texture};
 use worley::{Config, Outputs, Simd, SimdBorder};
@@ -53,6 +53,10 @@ const HIDE: (Vec3, f32) = (Vec3::new(1.2, 1.0, 2.6), 1.0);
 const SUN: Vec3 = Vec3::new(-0.45, 0.8, -0.4);
 /// Mortar where the border distance is below this (texture units).
 const MORTAR: f32 = 0.035;
+/// Footprints wider than this see the colours of the neighbouring stones
+/// ([`cell_cover8`]); narrower ones see them only under the mortar, which
+/// is at least this wide.
+const COVER_FROM: f32 = 2.0 * MORTAR;
 /// The stone's edge is rounded over this distance from its border.
 const BEVEL: f32 = 0.12;
 
@@ -148,6 +152,8 @@ struct Textures {
     /// (even mortar whatever the spacing of the points), its normal for the
     /// bevel, and the cell's ID for the stone's colour.
     stones: SimdBorder<3>,
+    /// F1..F4 with IDs and deltas: which stones a wide footprint covers.
+    neighbours: Simd<3, 4>,
     /// Fractal F1, five octaves: the foil's crumple.
     crumple: Texture<3, 1>,
     /// Fractal F1, three octaves: the hide's scales.
@@ -199,6 +205,7 @@ impl Textures {
         let _ = (crumple.blend_curve(), scales.blend_curve());
         Textures {
             stones,
+            neighbours: Simd::new(Config { order: 4, ..config }, Outputs::IdsAndDeltas).expect("a valid configuration"),
             crumple,
             scales,
             stain,
@@ -246,6 +253,11 @@ impl Textures {
             let border = (0..8)
                 .any(|i| floor(i) && (a_id[i] > 0.0 || a_mortar[i] > 0.0 || a_bevel[i] > 0.0))
                 .then(|| self.stones.border8(&at));
+            // Footprints wide enough to show the neighbouring stones.
+            let shares = (filtered && (0..8).any(|i| floor(i) && a_id[i] > 0.0 && w[i] > COVER_FROM)).then(|| {
+                let f = self.neighbours.evaluate8(&at);
+                (cell_cover8(&f, w), f.id.map(|v| v.to_array()))
+            });
             let stains = (0..8)
                 .any(|i| floor(i) && a_stain[i] > 0.0)
                 .then(|| self.stain.turbulence8(&stain_at(&at), 4).to_array());
@@ -277,9 +289,21 @@ impl Textures {
                 } else {
                     f32::from(u8::from(edge < MORTAR))
                 };
+                // The stones the footprint covers, each by its share (from
+                // COVER_FROM on, reached over one more COVER_FROM so the
+                // colour is continuous in the footprint), blended towards the
+                // mean stone as the identity's weight falls.
                 let stone = if filtered && a_id[i] < 1.0 {
                     let own = if a_id[i] > 0.0 { Vec3::from(id_colour(id)) } else { Vec3::ZERO };
-                    own * a_id[i] + self.stone_mean * (1.0 - a_id[i])
+                    let seen = match &shares {
+                        Some((share, ids)) if w[i] > COVER_FROM => {
+                            let covered: Vec3 = (0..4).map(|k| Vec3::from(id_colour(ids[k][i])) * share[k][i]).sum();
+                            let t = ((w[i] - COVER_FROM) / COVER_FROM).min(1.0);
+                            own * (1.0 - t) + covered * t
+                        }
+                        _ => own,
+                    };
+                    seen * a_id[i] + self.stone_mean * (1.0 - a_id[i])
                 } else {
                     Vec3::from(id_colour(id))
                 };

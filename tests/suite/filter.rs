@@ -243,3 +243,43 @@ fn identity_curves_fall_from_one_and_measure_a_probability() {
     let beta = f64::from(FLOOR) + alpha * (1.0 - f64::from(FLOOR));
     assert!(alpha > 0.0 && (beta - p).abs() < 0.03, "curve β {beta}, brute force {p}");
 }
+
+#[test]
+fn cell_shares_approach_the_footprint_s_own_shares() {
+    // Brute force: the share of a 32 × 32 grid over the square footprint
+    // (axis-aligned, 2D) in each of F1..F4's cells, against the point
+    // sample's (all in F1's cell) and `cell_cover8`'s.
+    let config = Config { order: 4, ..Config::default() };
+    let cells = Simd::<2, 4>::new(config, Outputs::IdsAndDeltas).unwrap();
+    for w in [0.1f32, 0.4, 1.0] {
+        let (mut point_error, mut cover_error) = (0.0, 0.0);
+        for i in 0..400 {
+            let x = [2000.0 * uniform(21, 2 * i) - 1000.0, 2000.0 * uniform(21, 2 * i + 1) - 1000.0];
+            let f = cells.evaluate8(&[x; 8]);
+            let share = worley::filter::cell_cover8(&f, [w; 8]);
+            let ids = f.id.map(|v| v.to_array()[0]);
+            let mut truth = [0.0f64; 4];
+            let n = 32;
+            for a in 0..n {
+                for b in 0..n {
+                    let d = |j: usize| f64::from(w) * ((j as f64 + 0.5) / n as f64 - 0.5);
+                    let id = cells.evaluate([x[0] + d(a), x[1] + d(b)]).id[0];
+                    if let Some(k) = ids.iter().position(|&v| v == id) {
+                        truth[k] += 1.0 / (n * n) as f64;
+                    }
+                }
+            }
+            for k in 0..4 {
+                let point = if k == 0 { 1.0 } else { 0.0 };
+                point_error += (point - truth[k]).abs();
+                cover_error += (f64::from(share[k][0]) - truth[k]).abs();
+            }
+        }
+        assert!(cover_error < 0.5 * point_error, "w {w}: shares off by {cover_error}, point sample by {point_error}");
+    }
+    let f = cells.evaluate8(&[[f64::NAN, 0.0]; 8]);
+    assert!(worley::filter::cell_cover8(&f, [0.3; 8])[0][0].is_nan());
+    let f = cells.evaluate8(&[[0.5, 0.5]; 8]);
+    assert!(worley::filter::cell_cover8(&f, [-1.0; 8])[0][0].is_nan());
+    assert_eq!(worley::filter::cell_cover8(&f, [0.0; 8])[0][0], 1.0);
+}
