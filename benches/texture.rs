@@ -3,7 +3,9 @@
 //! octaves, and analytic gradients; and the paper's claim that F1 and F2
 //! together cost about as much as one scale of Perlin noise (improved
 //! noise, 8 lanes). And texture grids: whole grids against the same values
-//! eight points at a time.
+//! eight points at a time. And footprints: the same fractal sum filtered
+//! over widths from zero to many cells, where the cost per sample falls as
+//! octaves drop below the footprint.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
@@ -121,5 +123,33 @@ fn perlin_ratio(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, textures, texture_grids, perlin_ratio);
+/// A four-octave fractal F1 and a one-octave F2 − F1 on the same points,
+/// every sample with the same footprint width: zero (today's values, through
+/// the filtered entry point) and widths from a sixteenth of a cell to
+/// sixteen cells. Octaves finer than the footprint are replaced by their
+/// mean, so the cost falls with the width.
+fn footprints(c: &mut Criterion) {
+    let mut group = c.benchmark_group("texture-filtered/3d");
+    group.throughput(Throughput::Elements(POINTS as u64));
+    group.sample_size(20).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+    let xs = points();
+    let mut out = vec![0f32; POINTS];
+    let config = Config::default();
+    let fractal = Texture::<3, 1>::new(config, Combination::f(1), Fractal::octaves(4), None).unwrap();
+    let crackle = Texture::<3, 2>::new(config, Combination::crackle(), Fractal::default(), None).unwrap();
+    // Measured once, outside the timing.
+    let _ = (fractal.blend_curve(), crackle.blend_curve());
+    for width in [0.0f32, 0.0625, 0.25, 1.0, 4.0, 16.0] {
+        let widths = vec![width; POINTS];
+        group.bench_function(BenchmarkId::new("G1-4-octaves", width), |b| {
+            b.iter(|| fractal.filtered_values(black_box(&xs), Some(&widths), &mut out).unwrap())
+        });
+        group.bench_function(BenchmarkId::new("F2-F1", width), |b| {
+            b.iter(|| crackle.filtered_values(black_box(&xs), Some(&widths), &mut out).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, textures, texture_grids, perlin_ratio, footprints);
 criterion_main!(benches);

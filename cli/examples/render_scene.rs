@@ -652,19 +652,28 @@ fn run_campaign(width: usize, height: usize, dir: &std::path::Path) -> Result<()
         // 256 samples, with the floor's colour replaced by a flag.
         let floor_only: Vec<bool> = floor_pixels(&world, &camera);
         write(&dir.join(format!("{view}_reference.png")), &to_rgb(&camera, &reference).to_png()?)?;
-        for m in &methods {
-            // Cheap frames: the median of five; the others once.
-            let runs = if m.spp <= 4 { 5 } else { 1 };
-            let mut times = Vec::new();
-            let mut image = Vec::new();
-            for _ in 0..runs {
+        // Every method renders once; then the cheap ones (up to 4 spp) four
+        // more times, round-robin, so a slow spell of the machine falls on
+        // all of them alike. A frame's time is the median of its runs.
+        let mut images: Vec<Vec<Vec3>> = Vec::new();
+        let mut times: Vec<Vec<f64>> = vec![Vec::new(); methods.len()];
+        for round in 0..5 {
+            for (i, m) in methods.iter().enumerate() {
+                if round > 0 && m.spp > 4 {
+                    continue;
+                }
                 let t = Instant::now();
-                image = render(&textures, &world, &camera, m.shading, m.spp);
-                times.push(t.elapsed().as_secs_f64());
+                let image = render(&textures, &world, &camera, m.shading, m.spp);
+                times[i].push(t.elapsed().as_secs_f64());
+                if round == 0 {
+                    images.push(image);
+                }
             }
+        }
+        for ((m, image), times) in methods.iter().zip(&images).zip(&mut times) {
             times.sort_by(f64::total_cmp);
             let seconds = times[times.len() / 2];
-            let (rms, floor_rms, high) = errors(&image, &reference, &floor_only, width, height);
+            let (rms, floor_rms, high) = errors(image, &reference, &floor_only, width, height);
             let r = Measured { seconds, rms, floor_rms, high };
             table += &format!(
                 "| {view} | {} | {:.1} | {:.4} | {:.4} | {:.4} |\n",
@@ -681,7 +690,7 @@ fn run_campaign(width: usize, height: usize, dir: &std::path::Path) -> Result<()
                     Shading::Filtered(Width::Area) => "filtered",
                     Shading::Filtered(Width::Major) => "filtered_major",
                 };
-                write(&dir.join(format!("{view}_{tag}.png")), &to_rgb(&camera, &image).to_png()?)?;
+                write(&dir.join(format!("{view}_{tag}.png")), &to_rgb(&camera, image).to_png()?)?;
                 // The error, eight times brighter.
                 let error = Rgb {
                     width,
