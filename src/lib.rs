@@ -34,6 +34,7 @@
 //! | a huge world | [`Simd::evaluate_in_cell`], [`Simd::evaluate8_in_cell`], [`Reference::evaluate_in_cell`] | an `i64` cell plus a fraction: no precision lost far from the origin |
 //! | a tileable texture | [`Simd::evaluate_periodic`], [`Simd::evaluate8_periodic`] with a [`Period`] | samples in cells |
 //! | combinations, fractal sums, gradients | [`texture::Texture`] | F2 − F1, Σ gain^i·C(lacunarity^i·x), analytic gradients |
+//! | a pixel's footprint (a filter width per sample) | [`texture::Texture::filtered8`], `filtered`, `filtered_values`, `filtered_grid`, `filtered_gradient8`; [`filter`] | unresolved octaves skipped, values blended towards their means; zero width = the point sample's bits |
 //! | the distance to the cell's border (even mortar) | [`SimdBorder::border`], [`SimdBorder::border8`], `border_slice`, `border_grid`, `border_in_cell`, `border_periodic`; [`Reference::border`] | with the neighbour's ID and the border's normal; Euclidean |
 //! | Perlin noise beside it | [`perlin::Perlin`] | one point or eight |
 //!
@@ -101,6 +102,8 @@
 //! - [`simd`]: the 8-lane f32 kernel on `wide` and its batch APIs.
 //! - [`texture`], [`perlin`]: combinations, fractal sums, gradients, bump;
 //!   Perlin noise.
+//! - [`filter`]: what a sample is worth when it stands for a footprint:
+//!   the blend curves, measured once per texture, and the cell cover.
 //!
 //! The harness that checks all of this against a brute-force oracle is the
 //! `worley-harness` crate beside this one; the `worley` command is

@@ -9,14 +9,17 @@
 //! horizon shows no moiré and costs less.
 //!
 //! ```sh
-//! cargo run --release -p worley-cli --example render_scene -- [WIDTH HEIGHT] [PATH] [--point] [--spp N]
+//! cargo run --release -p worley-cli --example render_scene -- [WIDTH HEIGHT] [PATH] [--point] [--spp N] [--cover] [--split]
 //! cargo run --release -p worley-cli --example render_scene -- --campaign [WIDTH HEIGHT] [DIR]
 //! ```
 //!
 //! `--point` point-samples the textures (one sample per pixel unless
-//! `--spp` asks for more, on a stratified jittered grid); `--campaign`
-//! renders the scene and a plane receding to the horizon every way
-//! (point sampling, filtered, 4, 16 and 64 samples per pixel) against a
+//! `--spp` asks for more, on a stratified jittered grid); `--cover` gives
+//! wide footprints the colours of the stones they cover, `--split` shades
+//! the floor at four points of mid-sized footprints (both measured in the
+//! campaign); `--campaign` renders the scene and a plane receding to the
+//! horizon every way (point sampling, filtered with each option, 4, 16
+//! and 64 samples per pixel) against a
 //! 256-samples-per-pixel reference, prints the table of error against time
 //! per frame, and writes the plot and the pictures into DIR (default
 //! `out/footprint`).
@@ -51,6 +54,15 @@ struct Hit {
 const FOIL: (Vec3, f32) = (Vec3::new(-1.15, 1.0, 3.0), 1.0);
 const HIDE: (Vec3, f32) = (Vec3::new(1.2, 1.0, 2.6), 1.0);
 const SUN: Vec3 = Vec3::new(-0.45, 0.8, -0.4);
+/// Floor texture units per metre.
+const FLOOR_SCALE: f32 = 2.2;
+/// Floor footprints from this width (texture units) ramp up to four
+/// texture sub-samples with [`Shading::Filtered`]'s `split` (over one
+/// octave of width) ...
+const SPLIT_FROM: f32 = 0.0625;
+/// ... and ramp back down to one over the octave below this width, where
+/// the blend alone is close to the footprint's mean.
+const SPLIT_TO: f32 = 32.0;
 /// Mortar where the border distance is below this (texture units).
 const MORTAR: f32 = 0.035;
 /// Footprints wider than this see the colours of the neighbouring stones
@@ -142,8 +154,12 @@ impl Footprint {
 enum Shading {
     /// At the hit point.
     Point,
-    /// Standing for the pixel's footprint.
-    Filtered(Width),
+    /// Standing for the pixel's footprint; with `cover`, a wide footprint
+    /// sees the colours of the stones it covers ([`cell_cover8`]), else
+    /// only its own stone's, blended towards the mean stone; with `split`,
+    /// the floor's texture is evaluated at four points of footprints from
+    /// [`SPLIT_FROM`] to [`SPLIT_TO`], each standing for a quarter of it.
+    Filtered { width: Width, cover: bool, split: bool },
 }
 
 /// The textures, built once and shared by every thread.
@@ -241,9 +257,9 @@ impl Textures {
         // filtered; a point otherwise.
         let footprint = |scale: f32| footprints.map(|f| if filtered { f.width * scale } else { 0.0 });
         if has(Material::Floor) {
-            // Floor texture coordinates: 2.2 units per metre.
-            let at: [[f64; 3]; 8] = hits.map(|h| [h.point.x as f64 * 2.2, h.point.z as f64 * 2.2, 0.5]);
-            let w = footprint(2.2);
+            let scale = f64::from(FLOOR_SCALE);
+            let at: [[f64; 3]; 8] = hits.map(|h| [h.point.x as f64 * scale, h.point.z as f64 * scale, 0.5]);
+            let w = footprint(FLOOR_SCALE);
             let floor = |i: usize| hits[i].material == Material::Floor;
             let (a_id, a_mortar) = (self.identity.weight8(w), self.mortar.weight8(w));
             let a_stain = self.stains.weight8(w.map(|v| v * 1.5));
@@ -254,7 +270,8 @@ impl Textures {
                 .any(|i| floor(i) && (a_id[i] > 0.0 || a_mortar[i] > 0.0 || a_bevel[i] > 0.0))
                 .then(|| self.stones.border8(&at));
             // Footprints wide enough to show the neighbouring stones.
-            let shares = (filtered && (0..8).any(|i| floor(i) && a_id[i] > 0.0 && w[i] > COVER_FROM)).then(|| {
+            let cover = matches!(shading, Shading::Filtered { cover: true, .. });
+            let shares = (cover && (0..8).any(|i| floor(i) && a_id[i] > 0.0 && w[i] > COVER_FROM)).then(|| {
                 let f = self.neighbours.evaluate8(&at);
                 (cell_cover8(&f, w), f.id.map(|v| v.to_array()))
             });
@@ -273,7 +290,7 @@ impl Textures {
                 // The footprint's extent across the border (texture units):
                 // the mortar's edges and the bevel's ridge are straight lines
                 // at the pixel's scale.
-                let across = 2.2 * footprints[i].across(Vec3::new(normal[0], 0.0, normal[1]));
+                let across = FLOOR_SCALE * footprints[i].across(Vec3::new(normal[0], 0.0, normal[1]));
                 // The mortar's cover of the footprint: a straight edge under
                 // a box filter (the border distance rises at one per unit),
                 // exact while the footprint stays in the sample's cell and
@@ -314,11 +331,11 @@ impl Textures {
                 };
                 // The stone's edge is rounded down into the mortar: the
                 // border distance rises at one per unit along its normal
-                // (times 2.2 texture units per metre); the bevel fades with
+                // (times FLOOR_SCALE); the bevel fades with
                 // its own weight.
                 let rim = (edge / BEVEL).min(1.0);
                 let fade = if filtered { a_bevel[i] } else { 1.0 };
-                let g = Vec3::new(normal[0], 0.0, normal[1]) * (1.0 - rim) * 2.0 * 2.2 * fade;
+                let g = Vec3::new(normal[0], 0.0, normal[1]) * (1.0 - rim) * 2.0 * FLOOR_SCALE * fade;
                 let base = Vec3::splat(0.28) * mortar + stone * 0.8 * (1.0 - 0.5 * stain.min(1.0)) * (1.0 - mortar);
                 // The slope flips across the border's ridge: a footprint
                 // straddling it sees this side's flank over its share and the
@@ -366,6 +383,59 @@ impl Textures {
             colour[i] = sky(dirs[i]);
         }
         colour
+    }
+
+    /// The floor's lanes whose footprint is between [`SPLIT_FROM`] and
+    /// [`SPLIT_TO`] (texture units) take, for a share that ramps from 0 to
+    /// 1 over an octave of width at either end, the mean of four shadings
+    /// at the centres of the footprint's quarters, each standing for its
+    /// quarter: the footprint's average estimated from four samples rather
+    /// than blended from one.
+    fn split_floor(
+        &self,
+        world: &World,
+        hits: &[Hit; 8],
+        dirs: &[Vec3; 8],
+        footprints: &[Footprint; 8],
+        shading: Shading,
+        colour: &mut [Vec3; 8],
+    ) {
+        let share: [f32; 8] = std::array::from_fn(|i| {
+            if hits[i].material != Material::Floor {
+                return 0.0;
+            }
+            let w = footprints[i].width * FLOOR_SCALE;
+            let up = (w / SPLIT_FROM).log2().clamp(0.0, 1.0);
+            let down = (SPLIT_TO / w).log2().clamp(0.0, 1.0);
+            if up.is_nan() || down.is_nan() {
+                0.0
+            } else {
+                up.min(down)
+            }
+        });
+        if share.iter().all(|&s| s == 0.0) {
+            return;
+        }
+        let quarter = footprints.map(|f| Footprint { dx: f.dx * 0.5, dy: f.dy * 0.5, width: f.width * 0.5 });
+        let mut mean = [Vec3::ZERO; 8];
+        for (a, b) in [(-0.25, -0.25), (0.25, -0.25), (-0.25, 0.25), (0.25, 0.25)] {
+            let moved: [Hit; 8] = std::array::from_fn(|i| {
+                let mut h = hits[i];
+                if share[i] > 0.0 {
+                    h.point += footprints[i].dx * a + footprints[i].dy * b;
+                }
+                h
+            });
+            let c = self.shade8(world, &moved, dirs, &quarter, shading);
+            for (m, c) in mean.iter_mut().zip(c) {
+                *m += c * 0.25;
+            }
+        }
+        for ((c, m), s) in colour.iter_mut().zip(mean).zip(share) {
+            if s > 0.0 {
+                *c = *c * (1.0 - s) + m * s;
+            }
+        }
     }
 }
 
@@ -471,11 +541,14 @@ fn render(textures: &Textures, world: &World, camera: &Camera, shading: Shading,
             let dirs = rays.map(Vec3::normalize);
             let hits = dirs.map(|d| world.trace(camera.eye, d));
             let width = match shading {
-                Shading::Filtered(w) => w,
+                Shading::Filtered { width, .. } => width,
                 Shading::Point => Width::Area,
             };
             let footprints: [Footprint; 8] = std::array::from_fn(|i| camera.footprint(rays[i], &hits[i], width));
-            let colour = textures.shade8(world, &hits, &dirs, &footprints, shading);
+            let mut colour = textures.shade8(world, &hits, &dirs, &footprints, shading);
+            if let Shading::Filtered { split: true, .. } = shading {
+                textures.split_floor(world, &hits, &dirs, &footprints, shading, &mut colour);
+            }
             for (&(x, _, _), c) in packet.iter().zip(colour) {
                 row[x] += c / (side * side) as f32;
             }
@@ -522,6 +595,7 @@ fn main() -> Result<(), String> {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let mut flag = |name: &str| args.iter().position(|a| a == name).map(|i| args.remove(i)).is_some();
     let point = flag("--point");
+    let (cover, split) = (flag("--cover"), flag("--split"));
     let campaign = flag("--campaign");
     let spp = match args.iter().position(|a| a == "--spp") {
         Some(i) => {
@@ -552,7 +626,8 @@ fn main() -> Result<(), String> {
     let textures = Textures::new();
     let built = started.elapsed().as_secs_f64();
     let [(_, world, camera), _] = views(width, height);
-    let shading = if point || spp > 1 { Shading::Point } else { Shading::Filtered(Width::Area) };
+    let shading =
+        if point || spp > 1 { Shading::Point } else { Shading::Filtered { width: Width::Area, cover, split } };
     let image = render(&textures, &world, &camera, shading, spp);
     let elapsed = started.elapsed().as_secs_f64();
     write(std::path::Path::new(&path), &to_rgb(&camera, &image).to_png()?)?;
@@ -569,9 +644,16 @@ fn main() -> Result<(), String> {
 /// One way of rendering in the campaign.
 struct Method {
     name: &'static str,
+    /// The plot's label, and where it sits from the point (pixels), so the
+    /// labels of nearby points do not overlap.
+    label: (&'static str, i32, i32),
     shading: Shading,
     spp: usize,
 }
+
+/// A point of the plot: the view, the method's label, milliseconds per
+/// frame and RMS error.
+type Plotted = (&'static str, (&'static str, i32, i32), f64, f64);
 
 /// What a method's frame measured.
 struct Measured {
@@ -633,17 +715,39 @@ fn run_campaign(width: usize, height: usize, dir: &std::path::Path) -> Result<()
         rayon::current_num_threads()
     );
     let methods = [
-        Method { name: "(a) point sampling, 1 spp", shading: Shading::Point, spp: 1 },
-        Method { name: "(b) filtered, 1 spp (area width)", shading: Shading::Filtered(Width::Area), spp: 1 },
-        Method { name: "(b') filtered, 1 spp (major-axis width)", shading: Shading::Filtered(Width::Major), spp: 1 },
-        Method { name: "(c) point sampling, 4 spp", shading: Shading::Point, spp: 4 },
-        Method { name: "(c) point sampling, 16 spp", shading: Shading::Point, spp: 16 },
-        Method { name: "(c) point sampling, 64 spp", shading: Shading::Point, spp: 64 },
+        Method { name: "(a) point sampling, 1 spp", label: ("a", 8, -5), shading: Shading::Point, spp: 1 },
+        Method {
+            name: "(b) filtered, 1 spp (area width)",
+            label: ("b", -16, -5),
+            shading: Shading::Filtered { width: Width::Area, cover: false, split: false },
+            spp: 1,
+        },
+        Method {
+            name: "(b) filtered, 1 spp (area width and cell cover)",
+            label: ("b, cover", 8, 2),
+            shading: Shading::Filtered { width: Width::Area, cover: true, split: false },
+            spp: 1,
+        },
+        Method {
+            name: "(b) filtered, 1 spp (area width and 4 floor sub-samples)",
+            label: ("b, 4 floor sub-samples", 8, -5),
+            shading: Shading::Filtered { width: Width::Area, cover: false, split: true },
+            spp: 1,
+        },
+        Method {
+            name: "(b') filtered, 1 spp (major-axis width)",
+            label: ("b'", -4, -18),
+            shading: Shading::Filtered { width: Width::Major, cover: false, split: false },
+            spp: 1,
+        },
+        Method { name: "(c) point sampling, 4 spp", label: ("4 spp", 8, -5), shading: Shading::Point, spp: 4 },
+        Method { name: "(c) point sampling, 16 spp", label: ("16 spp", 8, -5), shading: Shading::Point, spp: 16 },
+        Method { name: "(c) point sampling, 64 spp", label: ("64 spp", 8, -5), shading: Shading::Point, spp: 64 },
     ];
     let mut table = String::from(
         "| view | method | ms per frame | RMS error | RMS error, floor pixels | high-frequency RMS error |\n|---|---|---|---|---|---|\n",
     );
-    let mut plotted: Vec<(&str, &str, f64, f64)> = Vec::new();
+    let mut plotted: Vec<Plotted> = Vec::new();
     for (view, world, camera) in views(width, height) {
         let t = Instant::now();
         let reference = render(&textures, &world, &camera, Shading::Point, 256);
@@ -683,12 +787,14 @@ fn run_campaign(width: usize, height: usize, dir: &std::path::Path) -> Result<()
                 r.floor_rms,
                 r.high
             );
-            plotted.push((view, m.name, r.seconds * 1e3, r.rms));
+            plotted.push((view, m.label, r.seconds * 1e3, r.rms));
             if m.spp == 1 {
                 let tag = match m.shading {
                     Shading::Point => "point",
-                    Shading::Filtered(Width::Area) => "filtered",
-                    Shading::Filtered(Width::Major) => "filtered_major",
+                    Shading::Filtered { width: Width::Major, .. } => "filtered_major",
+                    Shading::Filtered { cover: true, .. } => "filtered_cover",
+                    Shading::Filtered { split: true, .. } => "filtered_split",
+                    Shading::Filtered { .. } => "filtered",
                 };
                 write(&dir.join(format!("{view}_{tag}.png")), &to_rgb(&camera, image).to_png()?)?;
                 // The error, eight times brighter.
@@ -734,7 +840,7 @@ fn floor_pixels(world: &World, camera: &Camera) -> Vec<bool> {
 }
 
 /// RMS error against milliseconds per frame, log-log, one series per view.
-fn plot(points: &[(&str, &str, f64, f64)]) -> Result<String, String> {
+fn plot(points: &[Plotted]) -> Result<String, String> {
     use plotters::prelude::*;
     let fail = |e: &dyn std::fmt::Display| format!("cannot draw the plot: {e}");
     let (x_lo, x_hi) = points.iter().fold((f64::MAX, 0f64), |(l, h), p| (l.min(p.2), h.max(p.2)));
@@ -752,6 +858,8 @@ fn plot(points: &[(&str, &str, f64, f64)]) -> Result<String, String> {
             .map_err(|e| fail(&e))?;
         chart
             .configure_mesh()
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .x_label_formatter(&|v| format!("{v:.0}"))
             .x_desc("milliseconds per frame")
             .y_desc("RMS error (tone-mapped, 0..1)")
             .draw()
@@ -765,8 +873,9 @@ fn plot(points: &[(&str, &str, f64, f64)]) -> Result<String, String> {
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
             chart
                 .draw_series(series.iter().map(|p| {
-                    let short = p.1.split(',').take(2).collect::<Vec<_>>().join(",");
-                    Text::new(format!(" {short}"), (p.2, p.3), ("sans-serif", 11).into_font())
+                    let (label, dx, dy) = p.1;
+                    EmptyElement::at((p.2, p.3))
+                        + Text::new(label.to_string(), (dx, dy), ("sans-serif", 11).into_font())
                 }))
                 .map_err(|e| fail(&e))?;
         }

@@ -81,6 +81,48 @@ fn render_writes_the_requested_png_and_the_librarys_values() {
 }
 
 #[test]
+fn a_filtered_render_holds_the_librarys_footprint_values() {
+    // A step of 8 units: the fine octaves are unresolved, so the filtered
+    // values differ from the point samples, and each is the library's
+    // value for a footprint one step wide.
+    let dir = scratch("filtered");
+    let pfm = dir.join("filtered.pfm");
+    let out = worley(&[
+        "render",
+        "--dim",
+        "2",
+        "--combo",
+        "F1",
+        "--octaves",
+        "4",
+        "--size",
+        "24x16",
+        "--extent",
+        "192",
+        "--filtered",
+        "--png",
+        dir.join("filtered.png").to_str().unwrap(),
+        "--pfm",
+        pfm.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (w, h, values) = from_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+    assert_eq!((w, h), (24, 16));
+    let texture = Texture::<2, 1>::new(Config::default(), Combination::f(1), Fractal::octaves(4), None).unwrap();
+    let mut differ = 0;
+    for j in 0..h {
+        for i in 0..w {
+            let x = pixel([0.0, 0.0], 192.0, w, i, j);
+            let want = texture.filtered(x, 8.0);
+            assert_eq!(values[j * w + i].to_bits(), want.to_bits(), "pixel ({i}, {j})");
+            differ += usize::from(want != texture.value(x));
+        }
+    }
+    assert_eq!(differ, w * h, "every pixel's footprint spans cells");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_periodic_render_tiles_and_matches_the_library() {
     let dir = scratch("tile");
     let pfm = dir.join("tile.pfm");
