@@ -8,8 +8,8 @@
 //! ```
 //!
 //! 2D textures, 4000 random points in [−1000, 1000]², footprints that are
-//! axis-aligned squares of side w (user units: one cell holds one point on
-//! average) centred on the point; the truth is the mean of 24 × 24 point
+//! axis-aligned squares of side w (user units: the mean F1 is 1, a cell is
+//! about 2 units across) centred on the point; the truth is the mean of 24 × 24 point
 //! samples over the square. Error: RMS of estimate − truth, divided by the
 //! texture's standard deviation. Time: nanoseconds per estimate, eight
 //! lanes per call, one thread, the median of seven round-robin runs.
