@@ -195,12 +195,18 @@ impl BlendCurve {
         width.map(|w| self.weight(w))
     }
 
-    /// α·v + (1 − α)·mean per lane, and v itself (its bits) where α is 1.
+    /// α·v + (1 − α)·mean per lane; v itself (its bits) where α is 1, and
+    /// the mean where α is 0, whatever v is (an infinite distance of an
+    /// empty window included) unless v is NaN: a NaN value (bad input) or a
+    /// NaN weight (a bad width) gives NaN, as the texture's octaves that
+    /// are not evaluated do.
     pub fn blend8(&self, value: f32x8, alpha: [f32; 8]) -> f32x8 {
         let v = value.to_array();
         f32x8::from(std::array::from_fn::<f32, 8, _>(|i| {
-            if alpha[i] == 1.0 {
+            if alpha[i] == 1.0 || v[i].is_nan() {
                 v[i]
+            } else if alpha[i] == 0.0 {
+                self.mean
             } else {
                 alpha[i] * v[i] + (1.0 - alpha[i]) * self.mean
             }
@@ -377,6 +383,11 @@ mod tests {
         }
         let half = c.blend8(v, [0.5; 8]).to_array();
         assert_eq!(half[1], 1.5);
-        assert_eq!(c.blend8(v, [0.0; 8]).to_array()[2], 2.0);
+        // Weight 0: the mean, for finite and infinite values alike; NaN
+        // (bad input) stays NaN, and so does a NaN weight.
+        let none = c.blend8(v, [0.0; 8]).to_array();
+        assert_eq!((none[3], none[4], none[7]), (2.0, 2.0, 2.0));
+        assert!(none[2].is_nan());
+        assert!(c.blend8(v, [f32::NAN; 8]).to_array()[1].is_nan());
     }
 }
