@@ -4,7 +4,7 @@
 //! together cost about as much as one scale of Perlin noise (improved
 //! noise, 8 lanes). And texture grids: whole grids against the same values
 //! eight points at a time. And footprints: the same fractal sum filtered
-//! over widths from zero to many cells, where the cost per sample falls as
+//! over widths from zero to many cells across, where the cost per sample falls as
 //! octaves drop below the footprint.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -125,8 +125,8 @@ fn perlin_ratio(c: &mut Criterion) {
 
 /// A four-octave fractal F1 and a one-octave F2 − F1 on the same points,
 /// every sample with the same footprint width: zero (today's values, through
-/// the filtered entry point) and widths from a sixteenth of a cell to
-/// sixteen cells. Octaves finer than the footprint are replaced by their
+/// the filtered entry point) and widths from a sixteenth of a unit to
+/// sixteen units (the mean F1 is one unit). Octaves finer than the footprint are replaced by their
 /// mean, so the cost falls with the width.
 fn footprints(c: &mut Criterion) {
     let mut group = c.benchmark_group("texture-filtered/3d");

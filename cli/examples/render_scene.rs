@@ -714,6 +714,22 @@ fn run_campaign(width: usize, height: usize, dir: &std::path::Path) -> Result<()
         started.elapsed().as_secs_f64(),
         rayon::current_num_threads()
     );
+    // The weights the floor's fields and F1 (the crumple's first octave) get
+    // at a sixteenth of a unit and at one unit, and where they reach 0.
+    for (name, curve) in [
+        ("stone identity", &textures.identity),
+        ("mortar", &textures.mortar),
+        ("bevel", &textures.bevel),
+        ("stains", &textures.stains),
+        ("F1", textures.crumple.blend_curve()),
+    ] {
+        println!(
+            "blend curve {name}: weight {:.3} at 1/16, {:.3} at 1, 0 from {:.3} (texture units)",
+            curve.weight(0.0625),
+            curve.weight(1.0),
+            curve.cutoff()
+        );
+    }
     let methods = [
         Method { name: "(a) point sampling, 1 spp", label: ("a", 8, -5), shading: Shading::Point, spp: 1 },
         Method {
