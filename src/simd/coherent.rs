@@ -529,6 +529,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let mut near = vec![0f32; region.x_cell.len()];
         for r0 in (0..rows).step_by(K) {
             let rows_here = (rows - r0).min(K);
+            // The rows' outputs written once in order before the tiles write
+            // them sample by sample: a tile's stores reach `K` rows a whole
+            // row apart, which the prefetchers do not follow, and where the
+            // output is out of cache (a renderer's call between other work)
+            // each one waited for its line. Filled in order, the lines come
+            // in as a stream (docs/simd.md, "Outputs written in order first").
+            let stripe = &mut out[r0 * width..(r0 + rows_here) * width];
+            let any = stripe[0];
+            stripe.fill(any);
             let rk: [([i64; D], [f32; D]); K] = std::array::from_fn(|k| row_at(r0 + k.min(rows_here - 1)));
             // The rows' part of every tile: reference cell, span and box on
             // the axes other than 0.
@@ -1048,8 +1057,9 @@ fn min_max(v: &[i64]) -> (i64, i64) {
 
 /// What the coherent grid path writes per sample: whole results
 /// ([`Features32`], the outputs the [`Simd`] was built for) or the distances
-/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]).
-pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send {
+/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]). `Copy`, since a
+/// stripe of outputs is filled before its tiles write it.
+pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy {
     /// Whether the tiles compute the outputs the [`Simd`] was built for;
     /// false: distances only, whatever it was built for (the distances are
     /// the same bits either way).
