@@ -7,12 +7,13 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use worley::{Config, Metric, Mode, Outputs, Reference, Simd};
+use worley::{Config, Metric, Mode};
 use worley_cli::commands::{parse_metric, ranges, RangesArgs};
 use worley_cli::picture;
 use worley_cli::render_cmd::{render_command, RenderArgs};
+use worley_cli::runs::{run_reference, run_simd};
 use worley_cli::tune::{tune, TuneArgs};
-use worley_harness::{self as harness, Campaign, Report};
+use worley_harness::{Campaign, Report};
 
 #[derive(Parser)]
 #[command(name = "worley", version, about = "Worley's cellular basis: harness and tools")]
@@ -191,12 +192,8 @@ fn check(args: &CheckArgs) -> Result<(), String> {
     let spinner = indicatif::ProgressBar::new_spinner().with_message("running the campaign");
     spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     let report = match args.kernel {
-        KernelArg::Reference => dispatch(args.dim as usize, config, &campaign)?,
-        KernelArg::Simd => match args.dim {
-            2 => run_simd::<2>(config, &campaign)?,
-            3 => run_simd::<3>(config, &campaign)?,
-            _ => run_simd::<4>(config, &campaign)?,
-        },
+        KernelArg::Reference => run_reference(args.dim as usize, config, &campaign)?,
+        KernelArg::Simd => run_simd(args.dim as usize, config, &campaign)?,
     };
     spinner.finish_and_clear();
     if args.json {
@@ -205,33 +202,6 @@ fn check(args: &CheckArgs) -> Result<(), String> {
         print!("{}", report.to_table());
     }
     Ok(())
-}
-
-/// The SIMD kernel at the configuration's order (its order is a const
-/// generic, so each supported order is a separate instantiation). Orders 1,
-/// 2, 4 and 8, as `tune` measures: every instantiation compiles the whole
-/// kernel (every entry point, metric and output set) once per dimension,
-/// and with all eight orders this binary was the slowest unit of the
-/// optimised build by far. The reference kernel takes every order.
-fn run_simd<const D: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
-    fn go<const D: usize, const N: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
-        let kernel = Simd::<D, N>::new(config, Outputs::Ids).map_err(|e| e.to_string())?;
-        Ok(harness::run(&kernel, campaign))
-    }
-    match config.order {
-        1 => go::<D, 1>(config, campaign),
-        2 => go::<D, 2>(config, campaign),
-        4 => go::<D, 4>(config, campaign),
-        8 => go::<D, 8>(config, campaign),
-        n => Err(format!(
-            "order {n} is not built into the SIMD kernel's command line: use 1, 2, 4 or 8 (or --kernel reference)"
-        )),
-    }
-}
-
-fn run_reference<const D: usize>(config: Config, campaign: &Campaign) -> Result<Report, String> {
-    let kernel = Reference::<D>::new(config).map_err(|e| e.to_string())?;
-    Ok(harness::run(&kernel, campaign))
 }
 
 /// The main job: for 2D, 3D and 4D, the reference's speed for F1, F2 and F4,
@@ -270,7 +240,7 @@ fn main_job() -> Result<(), String> {
     for dim in 2..=4 {
         let mut row = format!("{:>4}", format!("{dim}D"));
         for order in [1, 2, 4] {
-            let r = dispatch(dim, Config { order, ..Config::default() }, &speed)?;
+            let r = run_reference(dim, Config { order, ..Config::default() }, &speed)?;
             row += &format!(" {:>8.3}", r.throughput / 1e6);
             reports.push(r);
             bar.inc(1);
@@ -306,12 +276,8 @@ fn main_job() -> Result<(), String> {
     for dim in 2..=4 {
         for order in [1, 2, 4] {
             let config = Config { order, ..Config::default() };
-            let r = dispatch(dim, config, &versus)?;
-            let v = match dim {
-                2 => run_simd::<2>(config, &versus)?,
-                3 => run_simd::<3>(config, &versus)?,
-                _ => run_simd::<4>(config, &versus)?,
-            };
+            let r = run_reference(dim, config, &versus)?;
+            let v = run_simd(dim, config, &versus)?;
             let max_err = |rep: &Report| rep.orders.iter().map(|o| o.max_error).fold(0.0, f64::max);
             let wrong: u64 = v.orders.iter().map(|o| o.oracle_disagreements + o.id_disagreements).sum();
             let disc: u64 = v.orders.iter().map(|o| o.continuity_violations).sum();
@@ -336,9 +302,9 @@ fn main_job() -> Result<(), String> {
     let mut exact = Vec::new();
     let mut window = Vec::new();
     for dim in 2..=4 {
-        exact.push(dispatch(dim, Config { order: 8, ..Config::default() }, &accuracy)?);
+        exact.push(run_reference(dim, Config { order: 8, ..Config::default() }, &accuracy)?);
         bar.inc(1);
-        window.push(dispatch(dim, Config { order: 8, mode: Mode::Window, ..Config::default() }, &accuracy)?);
+        window.push(run_reference(dim, Config { order: 8, mode: Mode::Window, ..Config::default() }, &accuracy)?);
         bar.inc(1);
     }
     let ppm = |n: u64| 1e6 * n as f64 / accuracy.oracle_samples as f64;
@@ -382,7 +348,7 @@ fn main_job() -> Result<(), String> {
     );
     say!("{:>4} {:>9} {:>9} {:>10}", "dim", "mean F1", "KS", "grid bias");
     for dim in 2..=4 {
-        let r = dispatch(dim, Config::default(), &statistics)?;
+        let r = run_reference(dim, Config::default(), &statistics)?;
         bar.inc(1);
         say!("{:>4} {:>9.5} {:>9.5} {:>9.3}%", format!("{dim}D"), r.mean_f1, r.ks, 100.0 * r.grid_bias);
         reports.push(r);
@@ -408,13 +374,4 @@ fn main_job() -> Result<(), String> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
-}
-
-fn dispatch(dim: usize, config: Config, campaign: &Campaign) -> Result<Report, String> {
-    match dim {
-        2 => run_reference::<2>(config, campaign),
-        3 => run_reference::<3>(config, campaign),
-        4 => run_reference::<4>(config, campaign),
-        _ => Err(format!("dimension {dim} is not supported: use 2, 3 or 4")),
-    }
 }
