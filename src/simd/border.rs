@@ -47,7 +47,7 @@
 //! and u one rounding of its length, so b is within
 //! 4ε_f32·(2·F1 + 2·b + 1/S) of the f64 reference (S the pattern's scale),
 //! and the normal within a few ε_f32; the neighbour is the reference's
-//! except where two planes lie that close. `tests/lanes/border.rs`
+//! except where two planes lie that close. `tests/grid_border/border.rs`
 //! measures both: at most 0.18 of that bound and 1.4·10^−7 on the normal,
 //! over random samples in 2D, 3D and 4D, lattice values, sparse points,
 //! window mode and samples around pairs of points 10^−3 cells apart. The

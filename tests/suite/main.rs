@@ -4,7 +4,8 @@
 //! metric, outputs, lanes) once, where a binary per file compiled it again
 //! in each file that used it. Filter by module: `cargo test --test suite
 //! oracle::`. The SIMD kernel's entry points and lanes, which CI tests
-//! again in each SIMD build, are the `lanes` binary (`tests/lanes/`).
+//! again in each SIMD build, are the `lanes` and `grid_border` binaries
+//! (`tests/lanes/`, `tests/grid_border/`).
 
 mod border;
 mod cell_hash;
