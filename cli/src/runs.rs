@@ -3,10 +3,9 @@
 //!
 //! Non-generic functions of the library, so that the kernel instantiations
 //! they need (every dimension, and the SIMD kernel's orders 1, 2, 4 and 8)
-//! are compiled once, here, beside the same kernels `tune` and `render`
-//! use, rather than again in the binary: an optimised crate compiles its own
-//! copy of every generic function it instantiates, and the binary's copy
-//! was the last and longest unit of the optimised build.
+//! are compiled here, beside the same kernels `tune` uses, and the binary
+//! compiles none: an optimised crate compiles its own copy of every generic
+//! function it instantiates.
 
 use worley::{Config, Outputs, Reference, Simd};
 use worley_harness::{self as harness, Campaign, Report};
