@@ -80,6 +80,39 @@ pub(crate) const BAND: usize = 64;
 /// cells, so fewer cells are generated twice (docs/simd.md has the
 /// measurement), where the parallel call keeps more bands for more cores.
 pub(crate) const SERIAL_BAND: usize = 128;
+/// Asks the CPU to bring the cache lines of `v` in, ready to be written:
+/// a tile's outputs, one tile ahead of the tile that writes them (see
+/// [`Simd::tiles`]). On targets without the hint, nothing; the tiles then
+/// fill each stripe of outputs in order first ([`PREFETCH`]).
+#[inline(always)]
+fn prefetch_write<T>(v: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_ET0};
+        let start = v.as_ptr().cast::<i8>();
+        let bytes = std::mem::size_of_val(v);
+        // From the line that holds the first byte to the one that holds the
+        // last; the pointers are only handed to the hint, never read.
+        let first_line = start.wrapping_sub(start as usize % 64);
+        let lines = (start as usize % 64 + bytes).div_ceil(64);
+        for i in 0..lines {
+            // SAFETY: a prefetch is a hint to the cache: it reads nothing
+            // into the program and does not fault, whatever the address
+            // (Intel SDM, PREFETCHh and PREFETCHW). SSE, which the intrinsic
+            // needs, is part of every x86-64 CPU.
+            #[allow(unsafe_code)]
+            unsafe {
+                _mm_prefetch::<_MM_HINT_ET0>(first_line.wrapping_add(64 * i))
+            };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = v;
+}
+
+/// Whether [`prefetch_write`] does anything on this target.
+const PREFETCH: bool = cfg!(target_arch = "x86_64");
+
 /// Relative slack of the candidate and certificate tests.
 const SLACK_REL: f32 = 1.0 / 256.0;
 /// Absolute slack of the same tests, in lane units (2^−24 cells).
@@ -458,7 +491,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             #[allow(unsafe_code)]
             return unsafe { self.tiles_avx2(o, band, out) };
         }
-        self.tiles_for::<Eight, 8, _, T>(Euclid, o, band, out)
+        // Out of line, as the other metrics' loops: where sixteen lanes run,
+        // this copy would otherwise sit inside theirs.
+        self.tiles_outputs(Euclid, o, band, out)
     }
 
     /// [`Simd::tiles_euclid`]'s eight-lane loops compiled with AVX2 enabled.
@@ -529,15 +564,19 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let mut near = vec![0f32; region.x_cell.len()];
         for r0 in (0..rows).step_by(K) {
             let rows_here = (rows - r0).min(K);
-            // The rows' outputs written once in order before the tiles write
-            // them sample by sample: a tile's stores reach `K` rows a whole
-            // row apart, which the prefetchers do not follow, and where the
-            // output is out of cache (a renderer's call between other work)
-            // each one waited for its line. Filled in order, the lines come
-            // in as a stream (docs/simd.md, "Outputs written in order first").
-            let stripe = &mut out[r0 * width..(r0 + rows_here) * width];
-            let any = stripe[0];
-            stripe.fill(any);
+            // A tile's stores reach `K` rows a whole row apart, which the
+            // hardware prefetchers do not follow, and where the output is out
+            // of cache (a renderer's call between other work) each one would
+            // wait for its line. So every tile asks for the next tile's lines
+            // while it computes (docs/simd.md, "The next tile's outputs asked
+            // for"); where the target has no such hint, the rows' outputs are
+            // written once in order first, so that their lines come in as a
+            // stream.
+            if !PREFETCH {
+                let stripe = &mut out[r0 * width..(r0 + rows_here) * width];
+                let any = stripe[0];
+                stripe.fill(any);
+            }
             let rk: [([i64; D], [f32; D]); K] = std::array::from_fn(|k| row_at(r0 + k.min(rows_here - 1)));
             // The rows' part of every tile: reference cell, span and box on
             // the axes other than 0.
@@ -599,6 +638,16 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 tile.bhi[0] = p0.max(p1);
                 tile.x_f = load::<L>(&x_f, x0);
                 tile.x_cl = L::sub(load::<L>(&x_cell, x0), L::f(shift));
+                if PREFETCH {
+                    // The next tile's outputs: the next along this stripe, or
+                    // the next stripe's first.
+                    let (next_row, next_x) = if x0 + K < width { (r0, x0 + K) } else { (r0 + K, 0) };
+                    let next_cols = (width - next_x).min(K);
+                    for k in next_row..(next_row + K).min(rows) {
+                        let o = k * width + next_x;
+                        prefetch_write(&out[o..o + next_cols]);
+                    }
+                }
                 self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, (&cell_rows, &near), !T::FULL, &mut best);
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<L, DELTAS>(b);
@@ -649,8 +698,11 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     gap[a] = point_gap::<L>(L::add(L::f(frame[a]), load::<L>(&region.q[a], g)), blo[a], bhi[a]);
                 }
                 let rest = if D > 1 { metric.rest::<L, D>(&gap) } else { L::f(0.0) };
-                let n = (e - g).min(L::N);
-                near[g..g + n].copy_from_slice(&lanes_of::<L>(rest)[..n]);
+                // A whole vector (`near` is padded like the points): the
+                // lanes past the row's last point land on points of rows
+                // later in the region, which are written when their row is
+                // reached, or never read (the scan masks them off).
+                L::f_store(rest, &mut near[g..g + L::N]);
             }
             rows.push(row);
             if !next_cell(&mut c, lo, hi) {
@@ -742,8 +794,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         for row in rows.iter().filter(|r| r.own) {
             for xc in x_cells.iter().filter(|xc| xc.own) {
                 let (i, x_shift) = (row.base + xc.index, shift(xc.index as f32));
-                for p in region.start[i] as usize..region.start[i + 1] as usize {
-                    self.candidate::<L, K, M, IDS, DELTAS>(metric, region, p, (x_shift, &row.shift), spill, best);
+                // The cell's points as slices of one length, so that reading
+                // point j checks no bounds.
+                let (s, e) = (region.start[i] as usize, region.start[i + 1] as usize);
+                let q: [&[f32]; D] = per_axis(|a| &region.q[a][s..e]);
+                let id = if IDS { &region.id[s..e] } else { &[][..] };
+                for j in 0..e - s {
+                    let point = (per_axis(|a| q[a][j]), if IDS { id[j] } else { 0 });
+                    self.candidate::<L, K, M, IDS, DELTAS>(metric, point, (x_shift, &row.shift), spill, best);
                 }
             }
         }
@@ -789,10 +847,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 while bits != 0 {
                     let p = g + bits.trailing_zeros() as usize;
                     bits &= bits - 1;
+                    let point = (per_axis(|a| region.q[a][p]), if IDS { region.id[p] } else { 0 });
                     self.candidate::<L, K, M, IDS, DELTAS>(
                         metric,
-                        region,
-                        p,
+                        point,
                         (shift(region.x_cell[p]), &row.shift),
                         spill,
                         best,
@@ -882,8 +940,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         all[N - 1]
     }
 
-    /// One candidate point `p` of the region against every lane of a tile:
-    /// `x_shift` is each lane's position minus the point's cell corner on
+    /// One candidate point of the region, its coordinates `q` (the 24-bit
+    /// integers) and its ID, against every lane of a tile: `x_shift` is each lane's position minus the point's cell corner on
     /// axis 0, `row_shift` each row's on the other axes. Its delta is
     /// `shift − q` on every axis, so a row shares the rest of the rank
     /// ([`Metric32::rest`]) and only axis 0's term is per lane; the rest
@@ -893,16 +951,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     fn candidate<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
-        region: &Region<D>,
-        p: usize,
+        (q, id): ([f32; D], u32),
         (x_shift, row_shift): (L::F, &[L::F; D]),
         (spill, spilled): (&Spill, &Spill),
         best: &mut [Best<L, D, N>; K],
     ) {
-        let dx = L::sub(x_shift, L::f(region.q[0][p]));
-        let id = if IDS { L::u(region.id[p]) } else { L::u(0) };
-        let d_row: [L::F; D] =
-            per_axis(|a| if a == 0 { L::f(0.0) } else { L::sub(row_shift[a], L::f(region.q[a][p])) });
+        let dx = L::sub(x_shift, L::f(q[0]));
+        let id = L::u(id);
+        let d_row: [L::F; D] = per_axis(|a| if a == 0 { L::f(0.0) } else { L::sub(row_shift[a], L::f(q[a])) });
         let d_row_lanes: [[f32; WIDEST]; D] =
             if DELTAS || !M::SPLITS { per_axis(|a| lanes_of::<L>(d_row[a])) } else { [[0.0; WIDEST]; D] };
         let delta = |k: usize| -> [L::F; D] { per_axis(|a| if a == 0 { dx } else { L::f(d_row_lanes[a][k]) }) };
