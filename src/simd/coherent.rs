@@ -788,7 +788,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let shift = |cell: f32| L::sub(t.x_f, L::sub(L::f((cell - reference) * UNIT), t.x_cl));
 
         let spill = Spill::default();
-        let spill = (&spill, std::hint::black_box(&spill));
+        // With 1 in every lane, from a value the compiler cannot see: the
+        // rows' additions of a candidate's rank go to the multiply-add
+        // units (`Lanes::add_on_fma`), beside the minimums that follow them.
+        let spill = (&spill, std::hint::black_box(&spill), L::f(std::hint::black_box(1.0)));
 
         // The tile's own cells: every point is a candidate.
         for row in rows.iter().filter(|r| r.own) {
@@ -946,14 +949,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// `shift − q` on every axis, so a row shares the rest of the rank
     /// ([`Metric32::rest`]) and only axis 0's term is per lane; the rest
     /// is written through the first reference of `spill` and read through
-    /// the second (see [`Spill`]).
+    /// the second (see [`Spill`]); the third is 1 in every lane.
     #[inline(always)]
     fn candidate<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
         &self,
         metric: M,
         (q, id): ([f32; D], u32),
         (x_shift, row_shift): (L::F, &[L::F; D]),
-        (spill, spilled): (&Spill, &Spill),
+        (spill, spilled, one): (&Spill, &Spill, L::F),
         best: &mut [Best<L, D, N>; K],
     ) {
         let dx = L::sub(x_shift, L::f(q[0]));
@@ -968,7 +971,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 cell.set(v);
             }
             for (k, b) in best.iter_mut().enumerate() {
-                let rank = metric.fold::<L>(L::f(spilled.0[k].get()), first);
+                let rank = metric.fold_on_fma::<L>(L::f(spilled.0[k].get()), first, one);
                 if skip::<L, D, N, IDS, DELTAS>(rank, b) {
                     continue;
                 }

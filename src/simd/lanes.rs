@@ -44,6 +44,17 @@ pub trait Lanes: Copy + 'static {
 
     /// a + b
     fn add(a: Self::F, b: Self::F) -> Self::F;
+    /// a + b computed as a · `one` + b, `one` being 1 in every lane: the
+    /// same bits as [`Lanes::add`] (a · 1 is exact, so a fused and an
+    /// unfused multiply-add both round a + b once). Where the build has FMA
+    /// it runs on the multiply-add units, which on AMD's Zen 4 are not the
+    /// ones that add and take minimums. `one` must come from a value the
+    /// compiler cannot see, or it turns the product back into an addition.
+    #[inline(always)]
+    fn add_on_fma(a: Self::F, b: Self::F, one: Self::F) -> Self::F {
+        let _ = one;
+        Self::add(a, b)
+    }
     /// a − b
     fn sub(a: Self::F, b: Self::F) -> Self::F;
     /// a · b (rounded once; never fused)
@@ -336,6 +347,14 @@ macro_rules! wide_lanes {
                 a + b
             }
             #[inline(always)]
+            fn add_on_fma(a: $f, b: $f, one: $f) -> $f {
+                if cfg!(target_feature = "fma") {
+                    a.mul_add(one, b)
+                } else {
+                    a + b
+                }
+            }
+            #[inline(always)]
             fn sub(a: $f, b: $f) -> $f {
                 a - b
             }
@@ -482,6 +501,39 @@ wide_lanes!(Sixteen, 16, f32x16, u32x16, i32x16, from_i32x16);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `add_on_fma` gives `add`'s bits, with the 1 hidden from the compiler
+    /// as the tiles hide it: signed zeros, infinities, NaN, subnormals,
+    /// cancellation and rounding ties, in every lane set of the build.
+    #[test]
+    fn add_on_fma_is_the_sum_bit_for_bit() {
+        fn check<L: Lanes>() {
+            let special = [0.0, -0.0, 1.0, -1.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, f32::MIN_POSITIVE / 4.0];
+            let mut values: Vec<f32> = special.to_vec();
+            let mut state = 0x9E37_79B9u32;
+            for _ in 0..4000 {
+                state = state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+                values.push(f32::from_bits(state));
+                values.push(1.0 + (state >> 9) as f32 * f32::EPSILON);
+            }
+            let one = L::f(std::hint::black_box(1.0));
+            for pair in values.chunks(2 * L::N).filter(|c| c.len() == 2 * L::N) {
+                let (a, b) = (L::f_load(&pair[..L::N]), L::f_load(&pair[L::N..]));
+                for (x, y) in [(a, b), (b, a)] {
+                    let (mut sum, mut fused) = ([0f32; WIDEST], [0f32; WIDEST]);
+                    L::f_store(L::add(x, y), &mut sum);
+                    L::f_store(L::add_on_fma(x, y, one), &mut fused);
+                    for (s, f) in sum[..L::N].iter().zip(&fused[..L::N]) {
+                        assert!(s.to_bits() == f.to_bits() || (s.is_nan() && f.is_nan()), "{s} vs {f}");
+                    }
+                }
+            }
+        }
+        check::<One>();
+        check::<Eight>();
+        #[cfg(target_feature = "avx512f")]
+        check::<Sixteen>();
+    }
 
     /// The lane multiply, whichever instructions `wide` compiled it to, is
     /// the wrapping product of every lane, in eight and in sixteen lanes.

@@ -1188,6 +1188,13 @@ pub trait Metric32: Copy {
     fn term<L: Lanes>(&self, x: L::F) -> L::F;
     /// Combines two partial ranks: a sum, or a maximum for Chebyshev.
     fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F;
+    /// [`Metric32::fold`], the same bits, a sum computed by
+    /// [`Lanes::add_on_fma`] (`one` is 1 in every lane).
+    #[inline(always)]
+    fn fold_on_fma<L: Lanes>(&self, a: L::F, b: L::F, one: L::F) -> L::F {
+        let _ = one;
+        self.fold::<L>(a, b)
+    }
     /// Rank of a length.
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F;
     /// Whether [`Metric32::rank`] is, bit for bit, axis 0's term folded
@@ -1239,6 +1246,10 @@ impl Metric32 for Euclid {
     #[inline(always)]
     fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
         L::add(a, b)
+    }
+    #[inline(always)]
+    fn fold_on_fma<L: Lanes>(&self, a: L::F, b: L::F, one: L::F) -> L::F {
+        L::add_on_fma(a, b, one)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
