@@ -944,8 +944,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     }
 
     /// One candidate point of the region, its coordinates `q` (the 24-bit
-    /// integers) and its ID, against every lane of a tile: `x_shift` is each lane's position minus the point's cell corner on
-    /// axis 0, `row_shift` each row's on the other axes. Its delta is
+    /// integers) and its ID, against every lane of a tile: `x_shift` is
+    /// each lane's position minus the point's cell corner on axis 0,
+    /// `row_shift` each row's on the other axes. Its delta is
     /// `shift − q` on every axis, so a row shares the rest of the rank
     /// ([`Metric32::rest`]) and only axis 0's term is per lane; the rest
     /// is written through the first reference of `spill` and read through
