@@ -24,10 +24,12 @@
 //! [`Simd::slice_avx512`] and [`Simd::tiles_avx512`] (the coherent path's
 //! tiles) below, and their only calls are in [`evaluate_slice`] and
 //! [`tiles`], after [`runtime_avx512`] has seen the CPU report the
-//! features. This module, the run-time AVX2 calls in `mod.rs` and
-//! `coherent.rs`, and the grid tiles' prefetch of their outputs in
-//! `coherent.rs` (a cache hint, which reads nothing and cannot fault) are
-//! the crate's only `unsafe` code.
+//! features. [`Avx512::broadcast_add_on_fma`] is one instruction of inline
+//! assembly ([`broadcast_fma`]: the compiler does not emit that form). This
+//! module, the run-time AVX2 calls in `mod.rs` and `coherent.rs`, the grid
+//! tiles' prefetch of their outputs in `coherent.rs` (a cache hint, which
+//! reads nothing and cannot fault) and the same multiply-add for `wide`'s
+//! sixteen lanes in `lanes.rs` are the crate's only `unsafe` code.
 //!
 //! With the sixteen lanes here the default build ran 3D F1 on random
 //! points at 25.1-25.7 M samples/s against 22.7-23.3 for the AVX-512 build
@@ -48,7 +50,9 @@ use std::arch::x86_64::{
 use super::batch::Point;
 use super::coherent::{Band, GridSample};
 use super::lanes::Lanes;
+use super::lanes::WIDEST;
 use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
+use std::cell::Cell;
 
 /// Sixteen lanes in one AVX-512 register each, masks in a mask register.
 /// Every operation is the IEEE operation [`One`](super::lanes::One) does,
@@ -103,6 +107,11 @@ impl Lanes for Avx512 {
     #[inline(always)]
     fn add_on_fma(a: __m512, b: __m512, one: __m512) -> __m512 {
         unsafe { _mm512_fmadd_ps(a, one, b) }
+    }
+    #[inline(always)]
+    fn broadcast_add_on_fma(a: &[Cell<f32>; WIDEST], k: usize, b: __m512, one: __m512) -> __m512 {
+        let _ = &a[k];
+        unsafe { broadcast_fma(a, k, b, one) }
     }
     #[inline(always)]
     fn sub(a: __m512, b: __m512) -> __m512 {
@@ -295,6 +304,30 @@ pub(super) fn tiles<const D: usize, const N: usize, T: GridSample<D, N>>(
     true
 }
 
+/// `a[k]` broadcast, times `one`, plus `b`: the multiply-add
+/// [`Lanes::broadcast_add_on_fma`] asks for, with the broadcast embedded
+/// (`{1to16}`), which the compiler does not choose by itself.
+///
+/// # Safety
+/// The CPU must have AVX-512F, and `k` must be below `WIDEST` (the caller
+/// indexes `a[k]` first). The instruction reads the four bytes of `a[k]`,
+/// a live `Cell<f32>` that nothing writes meanwhile, and writes only its
+/// output register.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn broadcast_fma(a: &[Cell<f32>; WIDEST], k: usize, b: __m512, one: __m512) -> __m512 {
+    let mut sum = b;
+    std::arch::asm!(
+        "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
+        sum = inout(zmm_reg) sum,
+        one = in(zmm_reg) one,
+        a = in(reg) a.as_ptr(),
+        k = in(reg) k,
+        options(pure, readonly, nostack, preserves_flags),
+    );
+    sum
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -350,8 +383,24 @@ mod tests {
     fn check(fa: &[f32; 16], fb: &[f32; 16], ua: &[u32; 16], ub: &[u32; 16]) {
         type L = Avx512;
         let (a, b, x, y) = (L::f_load(fa), L::f_load(fb), L::u_load(ua), L::u_load(ub));
-        let floats: [Float; 7] = [
+        let one = L::f(std::hint::black_box(1.0));
+        let cells: [Cell<f32>; WIDEST] = std::array::from_fn(|l| Cell::new(fa[l]));
+        for (k, &ak) in fa.iter().enumerate() {
+            let mut lanes = [0.0; 16];
+            L::f_store(L::broadcast_add_on_fma(&cells, k, b, one), &mut lanes);
+            for l in 0..16 {
+                let w = One::add(ak, fb[l]);
+                let same = lanes[l].to_bits() == w.to_bits() || (lanes[l].is_nan() && w.is_nan());
+                assert!(
+                    same,
+                    "broadcast_add_on_fma(a[{k}] = {:?}, {:?}) lane {l}: {:?} against {w:?}",
+                    fa[k], fb[l], lanes[l]
+                );
+            }
+        }
+        let floats: [Float; 8] = [
             ("add", L::add(a, b), One::add),
+            ("add_on_fma", L::add_on_fma(a, b, one), One::add),
             ("sub", L::sub(a, b), One::sub),
             ("mul", L::mul(a, b), One::mul),
             ("min", L::min(a, b), One::min),

@@ -790,7 +790,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let spill = Spill::default();
         // With 1 in every lane, from a value the compiler cannot see: the
         // rows' additions of a candidate's rank go to the multiply-add
-        // units (`Lanes::add_on_fma`), beside the minimums that follow them.
+        // units (`Lanes::broadcast_add_on_fma`), beside the minimums that
+        // follow them.
         let spill = (&spill, std::hint::black_box(&spill), L::f(std::hint::black_box(1.0)));
 
         // The tile's own cells: every point is a candidate.
@@ -972,7 +973,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 cell.set(v);
             }
             for (k, b) in best.iter_mut().enumerate() {
-                let rank = metric.fold_on_fma::<L>(L::f(spilled.0[k].get()), first, one);
+                let rank = metric.fold_on_fma::<L>((&spilled.0, k), first, one);
                 if skip::<L, D, N, IDS, DELTAS>(rank, b) {
                     continue;
                 }
@@ -1046,10 +1047,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 /// rows to read them: in memory, read one at a time. Held in a register
 /// instead, each row's value is moved across lanes by a shuffle, sixteen per
 /// candidate in AVX-512 lanes, and these took a third of the insertions'
-/// time; read from memory, the load that feeds the addition broadcasts it.
-/// A tile writes through one reference and reads through another that the
-/// compiler cannot see to be the same ([`std::hint::black_box`], once per
-/// tile), so that it keeps the loads: 1.1x on the 3D F1 grid (docs/simd.md).
+/// time; read from memory, the load that feeds the addition broadcasts it
+/// (in AVX-512 lanes inside the multiply-add itself,
+/// [`Lanes::broadcast_add_on_fma`]). A tile writes through one reference
+/// and reads through another that the compiler cannot see to be the same
+/// ([`std::hint::black_box`], once per tile), so that it keeps the loads:
+/// 1.1x on the 3D F1 grid (docs/simd.md).
 #[derive(Default)]
 struct Spill([Cell<f32>; WIDEST]);
 

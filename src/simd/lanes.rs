@@ -11,6 +11,7 @@
 //! `Eight` and `Sixteen` are one macro over `wide`'s types of each width,
 //! so the two cannot drift apart.
 
+use std::cell::Cell;
 use wide::{f32x16, f32x8, i32x16, i32x8, u32x16, u32x8};
 
 /// The widest lane set's width: per-lane arrays in the kernel (cells,
@@ -54,6 +55,17 @@ pub trait Lanes: Copy + 'static {
     fn add_on_fma(a: Self::F, b: Self::F, one: Self::F) -> Self::F {
         let _ = one;
         Self::add(a, b)
+    }
+    /// The value in `a[k]` in every lane, plus b, computed as
+    /// [`Lanes::add_on_fma`] computes it (the same bits as
+    /// `add(f(a[k].get()), b)`). Where the lanes are one AVX-512 register, the
+    /// multiply-add reads `a` from memory and broadcasts it itself (an
+    /// embedded broadcast), where a broadcast of its own would take a slot
+    /// on the vector units: on Zen 4, a loop of these and minimums ran in
+    /// two thirds of the time (docs/simd.md).
+    #[inline(always)]
+    fn broadcast_add_on_fma(a: &[Cell<f32>; WIDEST], k: usize, b: Self::F, one: Self::F) -> Self::F {
+        Self::add_on_fma(Self::f(a[k].get()), b, one)
     }
     /// a − b
     fn sub(a: Self::F, b: Self::F) -> Self::F;
@@ -307,7 +319,7 @@ impl Lanes for One {
 /// The lanes of `wide`'s float and integer types of one width: the same
 /// code for eight and sixteen lanes, so that both follow one lane rule.
 macro_rules! wide_lanes {
-    ($name:ident, $n:literal, $f:ident, $u:ident, $i:ident, $from:ident) => {
+    ($name:ident, $n:literal, $f:ident, $u:ident, $i:ident, $from:ident, $broadcast:ident) => {
         impl Lanes for $name {
             const N: usize = $n;
             type F = $f;
@@ -353,6 +365,10 @@ macro_rules! wide_lanes {
                 } else {
                     a + b
                 }
+            }
+            #[inline(always)]
+            fn broadcast_add_on_fma(a: &[Cell<f32>; WIDEST], k: usize, b: $f, one: $f) -> $f {
+                $broadcast(a, k, b, one)
             }
             #[inline(always)]
             fn sub(a: $f, b: $f) -> $f {
@@ -495,16 +511,61 @@ macro_rules! wide_lanes {
     };
 }
 
-wide_lanes!(Eight, 8, f32x8, u32x8, i32x8, from_i32x8);
-wide_lanes!(Sixteen, 16, f32x16, u32x16, i32x16, from_i32x16);
+wide_lanes!(Eight, 8, f32x8, u32x8, i32x8, from_i32x8, broadcast_add_eight);
+wide_lanes!(Sixteen, 16, f32x16, u32x16, i32x16, from_i32x16, broadcast_add_sixteen);
+
+/// [`Lanes::broadcast_add_on_fma`] for [`Eight`]: the broadcast, then
+/// [`Lanes::add_on_fma`].
+#[inline(always)]
+fn broadcast_add_eight(a: &[Cell<f32>; WIDEST], k: usize, b: f32x8, one: f32x8) -> f32x8 {
+    Eight::add_on_fma(Eight::f(a[k].get()), b, one)
+}
+
+/// [`Lanes::broadcast_add_on_fma`] for [`Sixteen`]: in an AVX-512 build,
+/// one `vfmadd231ps` with `a[k]` broadcast from memory (`{1to16}`), which the
+/// compiler does not choose by itself (it broadcasts into a register first);
+/// elsewhere the broadcast, then [`Lanes::add_on_fma`].
+#[inline(always)]
+fn broadcast_add_sixteen(a: &[Cell<f32>; WIDEST], k: usize, b: f32x16, one: f32x16) -> f32x16 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+    {
+        use std::arch::x86_64::__m512;
+        // SAFETY: `f32x16` is sixteen f32 in one 64-byte AVX-512 register in
+        // this build (`wide` holds an `__m512`), so the transmutes only
+        // rename the type, and every bit pattern is valid in both. The
+        // instruction reads the four bytes of `a[k]`, a live `Cell<f32>`
+        // that nothing writes meanwhile (`k` is checked against the array
+        // first), and writes only its output register; the build has
+        // AVX-512F, which it needs. The address is the array's and `k` in a
+        // register, so that the sixteen rows of a tile share one base.
+        let _ = &a[k];
+        #[allow(unsafe_code)]
+        unsafe {
+            let mut sum: __m512 = std::mem::transmute::<f32x16, __m512>(b);
+            std::arch::asm!(
+                "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
+                sum = inout(zmm_reg) sum,
+                one = in(zmm_reg) std::mem::transmute::<f32x16, __m512>(one),
+                a = in(reg) a.as_ptr(),
+                k = in(reg) k,
+                options(pure, readonly, nostack, preserves_flags),
+            );
+            std::mem::transmute::<__m512, f32x16>(sum)
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx512f")))]
+    Sixteen::add_on_fma(Sixteen::f(a[k].get()), b, one)
+}
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// `add_on_fma` gives `add`'s bits, with the 1 hidden from the compiler
-    /// as the tiles hide it: signed zeros, infinities, NaN, subnormals,
-    /// cancellation and rounding ties, in every lane set of the build.
+    /// `add_on_fma` gives `add`'s bits, and `broadcast_add_on_fma` those of
+    /// `add` of the broadcast, with the 1 hidden from the compiler as the
+    /// tiles hide it: signed zeros, infinities, NaN, subnormals,
+    /// cancellation and rounding ties, every index of the broadcast, in
+    /// every lane set of the build.
     #[test]
     fn add_on_fma_is_the_sum_bit_for_bit() {
         fn check<L: Lanes>() {
@@ -527,11 +588,19 @@ mod tests {
                         assert!(s.to_bits() == f.to_bits() || (s.is_nan() && f.is_nan()), "{s} vs {f}");
                     }
                 }
+                let cells: [Cell<f32>; WIDEST] = std::array::from_fn(|i| Cell::new(pair[(7 * i) % pair.len()]));
+                for k in 0..WIDEST {
+                    let (mut sum, mut fused) = ([0f32; WIDEST], [0f32; WIDEST]);
+                    L::f_store(L::add(L::f(cells[k].get()), b), &mut sum);
+                    L::f_store(L::broadcast_add_on_fma(&cells, k, b, one), &mut fused);
+                    for (s, f) in sum[..L::N].iter().zip(&fused[..L::N]) {
+                        assert!(s.to_bits() == f.to_bits() || (s.is_nan() && f.is_nan()), "[{k}]: {s} vs {f}");
+                    }
+                }
             }
         }
         check::<One>();
         check::<Eight>();
-        #[cfg(target_feature = "avx512f")]
         check::<Sixteen>();
     }
 

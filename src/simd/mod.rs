@@ -126,6 +126,7 @@ pub(crate) use coherent::BAND;
 pub(crate) use coherent::SERIAL_BAND;
 pub use periodic::{Period, PeriodError, MAX_PERIOD};
 
+use std::cell::Cell;
 use wide::{f32x8, u32x8};
 
 use crate::config::{Config, ConfigError, Metric, Mode};
@@ -1188,12 +1189,13 @@ pub trait Metric32: Copy {
     fn term<L: Lanes>(&self, x: L::F) -> L::F;
     /// Combines two partial ranks: a sum, or a maximum for Chebyshev.
     fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F;
-    /// [`Metric32::fold`], the same bits, a sum computed by
-    /// [`Lanes::add_on_fma`] (`one` is 1 in every lane).
+    /// [`Metric32::fold`] of the value in `a[k]` (in every lane) and `b`, the
+    /// same bits; a sum is computed by [`Lanes::broadcast_add_on_fma`]
+    /// (`one` is 1 in every lane).
     #[inline(always)]
-    fn fold_on_fma<L: Lanes>(&self, a: L::F, b: L::F, one: L::F) -> L::F {
+    fn fold_on_fma<L: Lanes>(&self, (a, k): (&[Cell<f32>; WIDEST], usize), b: L::F, one: L::F) -> L::F {
         let _ = one;
-        self.fold::<L>(a, b)
+        self.fold::<L>(L::f(a[k].get()), b)
     }
     /// Rank of a length.
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F;
@@ -1248,8 +1250,8 @@ impl Metric32 for Euclid {
         L::add(a, b)
     }
     #[inline(always)]
-    fn fold_on_fma<L: Lanes>(&self, a: L::F, b: L::F, one: L::F) -> L::F {
-        L::add_on_fma(a, b, one)
+    fn fold_on_fma<L: Lanes>(&self, (a, k): (&[Cell<f32>; WIDEST], usize), b: L::F, one: L::F) -> L::F {
+        L::broadcast_add_on_fma(a, k, b, one)
     }
     #[inline(always)]
     fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
