@@ -110,6 +110,8 @@ impl Lanes for Avx512 {
     }
     #[inline(always)]
     fn broadcast_add_on_fma(a: &[Cell<f32>; WIDEST], k: usize, b: __m512, one: __m512) -> __m512 {
+        // `broadcast_fma` needs the CPU's AVX-512F (as every operation
+        // here) and `k` within the array, which this index checks.
         let _ = &a[k];
         unsafe { broadcast_fma(a, k, b, one) }
     }
