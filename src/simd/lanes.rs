@@ -4,8 +4,9 @@
 //! [`One`] (plain `f32`/`u32`), [`Eight`] (`wide`'s `f32x8`/`u32x8`) and
 //! [`Sixteen`] (`f32x16`/`u32x16`, which slices use in AVX-512 builds).
 //! Every operation here is one IEEE operation per lane with the same result
-//! in every build: no fused multiply-add, no approximate reciprocal, no
-//! horizontal reduction whose order could change. A single point evaluated
+//! in every build: no approximate reciprocal, no horizontal reduction whose
+//! order could change, and no fused multiply-add but a · 1 + b, which
+//! rounds a + b once as the addition does ([`Lanes::add_on_fma`]). A single point evaluated
 //! through `One` and the same point in any lane of `Eight` or `Sixteen` are
 //! therefore bit-identical, in the default, AVX2 and AVX-512 builds alike.
 //! `Eight` and `Sixteen` are one macro over `wide`'s types of each width,
@@ -59,7 +60,7 @@ pub trait Lanes: Copy + 'static {
     /// The value in `a[k]` in every lane, plus b, computed as
     /// [`Lanes::add_on_fma`] computes it (the same bits as
     /// `add(f(a[k].get()), b)`). Where the lanes are one AVX-512 register, the
-    /// multiply-add reads `a` from memory and broadcasts it itself (an
+    /// multiply-add reads `a[k]` from memory and broadcasts it itself (an
     /// embedded broadcast), where a broadcast of its own would take a slot
     /// on the vector units: on Zen 4, a loop of these and minimums ran in
     /// two thirds of the time (docs/simd.md).
