@@ -24,12 +24,12 @@
 //! [`Simd::slice_avx512`] and [`Simd::tiles_avx512`] (the coherent path's
 //! tiles) below, and their only calls are in [`evaluate_slice`] and
 //! [`tiles`], after [`runtime_avx512`] has seen the CPU report the
-//! features. [`Avx512::broadcast_add_on_fma`] is one instruction of inline
-//! assembly ([`broadcast_fma`]: the compiler does not emit that form). This
-//! module, the run-time AVX2 calls in `mod.rs` and `coherent.rs`, the grid
-//! tiles' prefetch of their outputs in `coherent.rs` (a cache hint, which
-//! reads nothing and cannot fault) and the same multiply-add for `wide`'s
-//! sixteen lanes in `lanes.rs` are the crate's only `unsafe` code.
+//! features. [`Avx512::broadcast_add_on_fma`] calls the one instruction of
+//! inline assembly in `lanes.rs` ([`broadcast_fma`]: the compiler does not
+//! emit that form). This module, the run-time AVX2 calls in `mod.rs` and
+//! `coherent.rs`, the grid tiles' prefetch of their outputs in
+//! `coherent.rs` (a cache hint, which reads nothing and cannot fault) and
+//! that instruction are the crate's only `unsafe` code.
 //!
 //! With the sixteen lanes here the default build ran 3D F1 on random
 //! points at 25.1-25.7 M samples/s against 22.7-23.3 for the AVX-512 build
@@ -50,7 +50,7 @@ use std::arch::x86_64::{
 use super::batch::Point;
 use super::coherent::{Band, GridSample};
 use super::lanes::Lanes;
-use super::lanes::WIDEST;
+use super::lanes::{broadcast_fma, WIDEST};
 use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
 use std::cell::Cell;
 
@@ -304,30 +304,6 @@ pub(super) fn tiles<const D: usize, const N: usize, T: GridSample<D, N>>(
     // `tiles_avx512` enables.
     unsafe { simd.tiles_avx512(o, band, out) };
     true
-}
-
-/// `a[k]` broadcast, times `one`, plus `b`: the multiply-add
-/// [`Lanes::broadcast_add_on_fma`] asks for, with the broadcast embedded
-/// (`{1to16}`), which the compiler does not choose by itself.
-///
-/// # Safety
-/// The CPU must have AVX-512F, and `k` must be below `WIDEST` (the caller
-/// indexes `a[k]` first). The instruction reads the four bytes of `a[k]`,
-/// a live `Cell<f32>` that nothing writes meanwhile, and writes only its
-/// output register.
-#[target_feature(enable = "avx512f")]
-#[inline]
-unsafe fn broadcast_fma(a: &[Cell<f32>; WIDEST], k: usize, b: __m512, one: __m512) -> __m512 {
-    let mut sum = b;
-    std::arch::asm!(
-        "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
-        sum = inout(zmm_reg) sum,
-        one = in(zmm_reg) one,
-        a = in(reg) a.as_ptr(),
-        k = in(reg) k,
-        options(pure, readonly, nostack, preserves_flags),
-    );
-    sum
 }
 
 #[cfg(test)]

@@ -320,7 +320,7 @@ impl Lanes for One {
 /// The lanes of `wide`'s float and integer types of one width: the same
 /// code for eight and sixteen lanes, so that both follow one lane rule.
 macro_rules! wide_lanes {
-    ($name:ident, $n:literal, $f:ident, $u:ident, $i:ident, $from:ident, $broadcast:ident) => {
+    ($name:ident, $n:literal, $f:ident, $u:ident, $i:ident, $from:ident $(, $broadcast:ident)?) => {
         impl Lanes for $name {
             const N: usize = $n;
             type F = $f;
@@ -367,10 +367,12 @@ macro_rules! wide_lanes {
                     a + b
                 }
             }
-            #[inline(always)]
-            fn broadcast_add_on_fma(a: &[Cell<f32>; WIDEST], k: usize, b: $f, one: $f) -> $f {
-                $broadcast(a, k, b, one)
-            }
+            $(
+                #[inline(always)]
+                fn broadcast_add_on_fma(a: &[Cell<f32>; WIDEST], k: usize, b: $f, one: $f) -> $f {
+                    $broadcast(a, k, b, one)
+                }
+            )?
             #[inline(always)]
             fn sub(a: $f, b: $f) -> $f {
                 a - b
@@ -512,50 +514,64 @@ macro_rules! wide_lanes {
     };
 }
 
-wide_lanes!(Eight, 8, f32x8, u32x8, i32x8, from_i32x8, broadcast_add_eight);
+wide_lanes!(Eight, 8, f32x8, u32x8, i32x8, from_i32x8);
 wide_lanes!(Sixteen, 16, f32x16, u32x16, i32x16, from_i32x16, broadcast_add_sixteen);
 
-/// [`Lanes::broadcast_add_on_fma`] for [`Eight`]: the broadcast, then
-/// [`Lanes::add_on_fma`].
-#[inline(always)]
-fn broadcast_add_eight(a: &[Cell<f32>; WIDEST], k: usize, b: f32x8, one: f32x8) -> f32x8 {
-    Eight::add_on_fma(Eight::f(a[k].get()), b, one)
-}
-
 /// [`Lanes::broadcast_add_on_fma`] for [`Sixteen`]: in an AVX-512 build,
-/// one `vfmadd231ps` with `a[k]` broadcast from memory (`{1to16}`), which the
-/// compiler does not choose by itself (it broadcasts into a register first);
-/// elsewhere the broadcast, then [`Lanes::add_on_fma`].
+/// [`broadcast_fma`]; elsewhere the broadcast, then [`Lanes::add_on_fma`].
 #[inline(always)]
 fn broadcast_add_sixteen(a: &[Cell<f32>; WIDEST], k: usize, b: f32x16, one: f32x16) -> f32x16 {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
     {
         use std::arch::x86_64::__m512;
+        let _ = &a[k];
         // SAFETY: `f32x16` is sixteen f32 in one 64-byte AVX-512 register in
         // this build (`wide` holds an `__m512`), so the transmutes only
-        // rename the type, and every bit pattern is valid in both. The
-        // instruction reads the four bytes of `a[k]`, a live `Cell<f32>`
-        // that nothing writes meanwhile (`k` is checked against the array
-        // first), and writes only its output register; the build has
-        // AVX-512F, which it needs. The address is the array's and `k` in a
-        // register, so that the sixteen rows of a tile share one base.
-        let _ = &a[k];
+        // rename the type, and every bit pattern is valid in both. The build
+        // has AVX-512F and `k` was checked against the array just above,
+        // which is what `broadcast_fma` needs.
         #[allow(unsafe_code)]
         unsafe {
-            let mut sum: __m512 = std::mem::transmute::<f32x16, __m512>(b);
-            std::arch::asm!(
-                "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
-                sum = inout(zmm_reg) sum,
-                one = in(zmm_reg) std::mem::transmute::<f32x16, __m512>(one),
-                a = in(reg) a.as_ptr(),
-                k = in(reg) k,
-                options(pure, readonly, nostack, preserves_flags),
-            );
-            std::mem::transmute::<__m512, f32x16>(sum)
+            let (b, one) = (std::mem::transmute::<f32x16, __m512>(b), std::mem::transmute::<f32x16, __m512>(one));
+            std::mem::transmute::<__m512, f32x16>(broadcast_fma(a, k, b, one))
         }
     }
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx512f")))]
     Sixteen::add_on_fma(Sixteen::f(a[k].get()), b, one)
+}
+
+/// `a[k]` broadcast, times `one`, plus `b`: the multiply-add that
+/// [`Lanes::broadcast_add_on_fma`] asks for in AVX-512 lanes, as one
+/// `vfmadd231ps` with the broadcast embedded (`{1to16}`), which the compiler
+/// does not choose by itself (it broadcasts into a register first). The
+/// address is the array's plus `k` in a register, so that the sixteen rows
+/// of a tile share one base. Used by `wide`'s sixteen lanes in AVX-512
+/// builds and by the run-time AVX-512 lanes of other builds.
+///
+/// # Safety
+/// The CPU must have AVX-512F, and `k` must be below `WIDEST`. The
+/// instruction then reads the four bytes of `a[k]`, a live `Cell<f32>` that
+/// nothing writes meanwhile, and writes only its output register.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+#[allow(unsafe_code)]
+pub(super) unsafe fn broadcast_fma(
+    a: &[Cell<f32>; WIDEST],
+    k: usize,
+    b: std::arch::x86_64::__m512,
+    one: std::arch::x86_64::__m512,
+) -> std::arch::x86_64::__m512 {
+    let mut sum = b;
+    std::arch::asm!(
+        "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
+        sum = inout(zmm_reg) sum,
+        one = in(zmm_reg) one,
+        a = in(reg) a.as_ptr(),
+        k = in(reg) k,
+        options(pure, readonly, nostack, preserves_flags),
+    );
+    sum
 }
 
 #[cfg(test)]
