@@ -1,7 +1,14 @@
 //! The 8-lane kernel beside the peers, 3D, one thread, the same sample
 //! positions for everybody:
 //! - `random`: 2^18 seeded points in [−1000, 1000]^3;
-//! - `grid`: a 256 × 256 slice (step 0.125, z = 0.5).
+//! - `grid`: a 256 × 256 slice (step 0.125, z = 0.5);
+//! - `frame`: the hits of a pinhole camera, 640 × 360 pixels, 60° vertical
+//!   field of view, 2 units above a ground plane that rises 12° away from
+//!   it, looking 20° down, in pixel order: a feature spans about forty
+//!   pixels at the bottom of the frame and less than one near the top
+//!   (see [`frame`]); `frame-shuffled` is the same points in a random order
+//!   (a bounce's hits), `frame-fine` the same at 8x the frequency (a
+//!   fractal's fourth octave).
 //!
 //! What each one computes (none of the peers is the same function):
 //! - `worley` F1 / F1F2: Poisson process, λ 5 per cell (the default), exact (certified
@@ -44,6 +51,47 @@ fn points() -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
     let grid =
         (0..SIDE * SIDE).map(|i| [(i % SIDE) as f32 * STEP as f32, (i / SIDE) as f32 * STEP as f32, 0.5]).collect();
     (random, grid)
+}
+
+/// Frame width and height in pixels.
+const FRAME: (usize, usize) = (640, 360);
+/// Texture frequency on the ground plane: world units to texture units.
+const FRAME_FREQUENCY: f64 = 6.0;
+
+/// The frame's hits in texture space, in pixel order (rows from the top).
+/// The camera sits at the origin, 2 units above the plane, looking along
+/// +y and pitched 20° down; the plane rises 12° along +y, so every pixel's
+/// ray meets it, the top rows about 60 units away.
+fn frame() -> Vec<[f32; 3]> {
+    let (w, h) = FRAME;
+    let tan_half = (30.0f64).to_radians().tan();
+    let (pitch, tilt) = ((-20.0f64).to_radians(), (12.0f64).to_radians());
+    // The plane: points p with n · p = −2·cos(tilt) (through (0, 0, −2)).
+    let n = [0.0, -tilt.sin(), tilt.cos()];
+    let offset = -2.0 * tilt.cos();
+    let mut hits = Vec::with_capacity(w * h);
+    for j in 0..h {
+        for i in 0..w {
+            let sx = (2.0 * (i as f64 + 0.5) / w as f64 - 1.0) * tan_half * w as f64 / h as f64;
+            let sy = (1.0 - 2.0 * (j as f64 + 0.5) / h as f64) * tan_half;
+            // Camera frame: x right, y forward, z up, then the pitch.
+            let d = [sx, pitch.cos() - sy * pitch.sin(), pitch.sin() + sy * pitch.cos()];
+            let t = offset / (n[1] * d[1] + n[2] * d[2]);
+            let p = [t * d[0], t * d[1], t * d[2] + 2.0];
+            hits.push(p.map(|v| (v * FRAME_FREQUENCY) as f32));
+        }
+    }
+    hits
+}
+
+/// `v` in a seeded random order (Fisher-Yates).
+fn shuffled(v: &[[f32; 3]]) -> Vec<[f32; 3]> {
+    let mut v = v.to_vec();
+    for i in (1..v.len()).rev() {
+        let j = (worley::math::uniform(99, i as u64) * (i + 1) as f64) as usize;
+        v.swap(i, j.min(i));
+    }
+    v
 }
 
 fn ours<const N: usize>(c: &mut Criterion, random: &[[f32; 3]], grid: &[[f32; 3]]) {
@@ -198,6 +246,12 @@ struct Entry<'a> {
 /// Round-robin: every entry once per round, 3 unmeasured rounds and then
 /// 15 measured, medians.
 fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
+    let frame_pts = frame();
+    let frames: [(&'static str, Vec<[f32; 3]>); 3] = [
+        ("frame", frame_pts.clone()),
+        ("frame-shuffled", shuffled(&frame_pts)),
+        ("frame-fine", frame_pts.iter().map(|p| p.map(|v| v * 8.0)).collect()),
+    ];
     use quick_noise::simd::SimdSliceIterExt;
     let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
     let f2 = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
@@ -237,6 +291,14 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let spec_4d = Grid { origin: [0.0, 0.0, 0.5, 0.5], step: [STEP, STEP, 1.0, 1.0], size: [SIDE, SIDE, 1, 1] };
     let (mut o1_2d, mut o1_4d) = (vec![[0f32; 1]; n], vec![[0f32; 1]; n]);
     let (mut border_g, mut border_r) = (vec![border.border([0.0; 3]); n], vec![border.border([0.0; 3]); random.len()]);
+    // The frames: every contestant on the same hits.
+    let frame_axes: Vec<[Vec<f32>; 3]> = frames.iter().map(|(_, pts)| axes(pts)).collect();
+    let m = frame_pts.len();
+    let mut frame_out: Vec<(Vec<f32>, Vec<f32>, Vec<f32>)> =
+        (0..3).map(|_| (vec![0f32; m], vec![0f32; m], vec![0f32; m])).collect();
+    let mut frame_f1: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
+    let mut frame_f2: Vec<Vec<Features32<3, 2>>> = (0..3).map(|_| slice_out2[..1].repeat(m)).collect();
+    let mut frame_crackle: Vec<Vec<f32>> = (0..3).map(|_| vec![0f32; m]).collect();
     let mut entries: Vec<Entry> = Vec::new();
     fn add<'a>(
         entries: &mut Vec<Entry<'a>>,
@@ -385,6 +447,67 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         random.len(),
         Box::new(|| border.border_slice(black_box(random), &mut border_r).unwrap()),
     );
+    let names: [[&'static str; 3]; 3] = [
+        ["frame F1", "frame F2−F1", "frame"],
+        ["frame-shuffled F1", "frame-shuffled F2−F1", "frame-shuffled"],
+        ["frame-fine F1", "frame-fine F2−F1", "frame-fine"],
+    ];
+    let simd_ok = simdnoise_points(&frame_axes[0], &mut frame_out[0].1, false);
+    for (k, ((((xs, (q, s1, s2)), o1f), o2f), cr)) in frame_axes
+        .iter()
+        .zip(frame_out.iter_mut())
+        .zip(frame_f1.iter_mut())
+        .zip(frame_f2.iter_mut())
+        .zip(frame_crackle.iter_mut())
+        .enumerate()
+    {
+        let pts: &[[f32; 3]] = &frames[k].1;
+        let [c1, c2, _] = names[k];
+        add(&mut entries, "quick-noise 0.3 F1", c1, m, Box::new(move || quick(xs, q)));
+        if simd_ok {
+            add(
+                &mut entries,
+                "simdnoise 3.1 F1",
+                c1,
+                m,
+                Box::new(move || {
+                    simdnoise_points(xs, s1, false);
+                    black_box(&s1);
+                }),
+            );
+            add(
+                &mut entries,
+                "simdnoise 3.1 F2−F1",
+                c2,
+                m,
+                Box::new(move || {
+                    simdnoise_points(xs, s2, true);
+                    black_box(&s2);
+                }),
+            );
+        }
+        let (f1, f2) = (&f1, &f2);
+        add(
+            &mut entries,
+            "worley evaluate_slice F1",
+            c1,
+            m,
+            Box::new(move || f1.evaluate_slice(black_box(pts), o1f).unwrap()),
+        );
+        add(
+            &mut entries,
+            "worley evaluate_slice F2−F1",
+            c2,
+            m,
+            Box::new(move || {
+                f2.evaluate_slice(black_box(pts), o2f).unwrap();
+                for (c, f) in cr.iter_mut().zip(o2f.iter()) {
+                    *c = f.distance[1] - f.distance[0];
+                }
+                black_box(&cr);
+            }),
+        );
+    }
     for round in 0..3 + 15 {
         for e in entries.iter_mut() {
             let start = Instant::now();
@@ -417,16 +540,13 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     println!("|---|---|---|---|---|");
     for (name, case, rate) in &medians {
         // The peers run in 3D only: the 2D and 4D rows have no ratio.
-        let quick_ref = match case.split_whitespace().next() {
-            Some("random") => of("quick-noise 0.3 F1", "random F1"),
-            Some("grid") => of("quick-noise 0.3 F1", "grid F1"),
-            _ => None,
-        };
-        let simd_ref = match *case {
-            "grid F1" => of("simdnoise 3.1 F1", "grid F1"),
-            "grid F2−F1" | "grid border" => of("simdnoise 3.1 F2−F1", "grid F2−F1"),
-            "random F1" => of("simdnoise 3.1 F1", "random F1"),
-            "random F2−F1" | "random border" => of("simdnoise 3.1 F2−F1", "random F2−F1"),
+        // Ratios within a workload (the case's first word): F1 against the
+        // peers' F1, F2 − F1 and the border against simdnoise's F2 − F1.
+        let (workload, what) = case.split_once(' ').unwrap_or((case, ""));
+        let quick_ref = of("quick-noise 0.3 F1", &format!("{workload} F1"));
+        let simd_ref = match what {
+            "F1" => of("simdnoise 3.1 F1", &format!("{workload} F1")),
+            "F2−F1" | "border" => of("simdnoise 3.1 F2−F1", &format!("{workload} F2−F1")),
             _ => None,
         };
         let ratio = |r: Option<f64>| r.map_or("".to_string(), |r| format!("{:.2}", rate / r));
