@@ -168,17 +168,6 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         if out.len() < xs.len() {
             return Err(SizeError { needed: xs.len(), given: out.len() });
         }
-        // Samples that share cells share their points (the `binned` module);
-        // the batch is binned only where a probe finds them.
-        if !self.slice_binned(xs, &mut out[..xs.len()]) {
-            self.slice_per_sample(xs, out);
-        }
-        Ok(())
-    }
-
-    /// [`Simd::evaluate_slice`] sample by sample: each block of lanes
-    /// locates its own samples and generates their cells' points.
-    pub(super) fn slice_per_sample<P: Point<D>>(&self, xs: &[P], out: &mut [Features32<D, N>]) {
         // Sixteen lanes where the build has AVX-512, eight otherwise (with
         // the run-time AVX2 copy in a default build): the same operations
         // per lane, so the same bits.
@@ -193,7 +182,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // AVX-512 build runs, compiled for them at run time.
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
         if super::avx512::evaluate_slice(self, xs, out) {
-            return;
+            return Ok(());
         }
         #[cfg(not(target_feature = "avx512f"))]
         self.slice_in_stages::<Eight, P>(
@@ -202,6 +191,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             |at, start| self.dispatch8_stage::<FIRST>(at, start),
             |at, start| self.dispatch8_stage::<REST>(at, start),
         );
+        Ok(())
     }
 
     /// Scattered samples in blocks of `L::N`: every block runs the first

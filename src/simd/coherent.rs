@@ -67,7 +67,7 @@ use super::lanes::Sixteen;
 use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::{
     distance_of_rank, per_axis, Best, Chebyshev, Euclid, Features32, Grid, Located, Manhattan, Metric32, Minkowski,
-    Outputs, Simd, INVALID_ID, UNIT, WHOLE,
+    Outputs, PointConstants, Simd, INVALID_ID, UNIT, WHOLE,
 };
 use crate::config::{Metric, Mode, MAX_ORDER};
 use crate::definition::{axis_term, axis_word, feature_id, hash_words, MAX_CELL_COORD};
@@ -114,9 +114,9 @@ fn prefetch_write<T>(v: &[T]) {
 const PREFETCH: bool = cfg!(target_arch = "x86_64");
 
 /// Relative slack of the candidate and certificate tests.
-pub(super) const SLACK_REL: f32 = 1.0 / 256.0;
+const SLACK_REL: f32 = 1.0 / 256.0;
 /// Absolute slack of the same tests, in lane units (2^−24 cells).
-pub(super) const SLACK_ABS: f32 = 16.0;
+const SLACK_ABS: f32 = 16.0;
 
 /// The feature points of a box of cells, generated once, as
 /// struct-of-arrays: cell i's points are `start[i]..start[i + 1]`, cells
@@ -124,77 +124,47 @@ pub(super) const SLACK_ABS: f32 = 16.0;
 pub(super) struct Region<const D: usize> {
     origin: [i64; D],
     side: [usize; D],
-    pub(super) start: Vec<u32>,
+    start: Vec<u32>,
     /// Fixed-point coordinates (the 24-bit integers, exact in f32), padded
     /// by [`WIDEST`] so that a group of lanes read from any cell stays in
     /// bounds.
-    pub(super) q: [Vec<f32>; D],
+    q: [Vec<f32>; D],
     /// Each point's cell along axis 0, from the region's first (exact:
     /// fewer than 2^24 cells), padded like `q`.
     x_cell: Vec<f32>,
     /// IDs, when the tiles read them (whole results with IDs; empty
     /// otherwise).
-    pub(super) id: Vec<u32>,
-    /// The cells' hashes and the axis words per axis value: buffers of
-    /// [`Region::fill`], kept for the next fill.
-    hashes: Vec<u32>,
-    words: [Vec<u32>; D],
+    id: Vec<u32>,
 }
 
 impl<const D: usize> Region<D> {
     /// The points of the cells `lo ..= hi` (inclusive per axis), with
     /// their IDs if `ids`, in the widest lanes the build has.
     fn generate<const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D], ids: bool) -> Self {
-        let mut region = Self::empty();
-        region.fill(simd, lo, hi, ids);
-        region
-    }
-
-    /// A region of no cell, whose buffers [`Region::fill`] reuses.
-    pub(super) fn empty() -> Self {
-        Region {
-            origin: [0; D],
-            side: [0; D],
-            start: Vec::new(),
-            q: std::array::from_fn(|_| Vec::new()),
-            x_cell: Vec::new(),
-            id: Vec::new(),
-            hashes: Vec::new(),
-            words: std::array::from_fn(|_| Vec::new()),
-        }
-    }
-
-    /// [`Region::generate`] into this region's buffers: after the first
-    /// fills, no allocation.
-    pub(super) fn fill<const N: usize>(&mut self, simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D], ids: bool) {
         #[cfg(target_feature = "avx512f")]
-        self.fill_in::<Sixteen, N>(simd, lo, hi, ids);
+        return Self::generate_in::<Sixteen, N>(simd, lo, hi, ids);
         #[cfg(not(target_feature = "avx512f"))]
-        self.fill_in::<Eight, N>(simd, lo, hi, ids);
+        Self::generate_in::<Eight, N>(simd, lo, hi, ids)
     }
 
-    /// [`Region::fill`] in lanes `L`: the cells' hashes and populations
+    /// [`Region::generate`] in lanes `L`: the cells' hashes and populations
     /// first, then each cell's points `L::N` at a time, point j in lane j
     /// (the jump-ahead constants make point j one multiply-add of the cell's
-    /// hash, [`Simd::coordinates_of`]). Every group of lanes is stored
-    /// whole: the lanes past the cell's population land where the next
-    /// cell's points go, or in the padding, and are overwritten or cleared.
-    /// Integer arithmetic and an exact conversion: the same values as one
-    /// point at a time.
+    /// hash). Every group of lanes is stored whole: the lanes past the
+    /// cell's population land where the next cell's points go, or in the
+    /// padding, and are overwritten or cleared. Integer arithmetic and an
+    /// exact conversion: the same values as one point at a time.
     #[inline(always)]
-    fn fill_in<L: Lanes, const N: usize>(&mut self, simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D], ids: bool) {
+    fn generate_in<L: Lanes, const N: usize>(simd: &Simd<D, N>, lo: [i64; D], hi: [i64; D], ids: bool) -> Self {
         let side: [usize; D] = std::array::from_fn(|a| (hi[a] - lo[a] + 1) as usize);
         let cells: usize = side.iter().product();
         // The axis words of each row of cells, mixed once per axis value.
-        for (a, words) in self.words.iter_mut().enumerate() {
-            words.clear();
-            words.extend((0..side[a]).map(|i| axis_word(a, axis_term(lo[a] + i as i64))));
-        }
+        let words: [Vec<u32>; D] =
+            std::array::from_fn(|a| (0..side[a]).map(|i| axis_word(a, axis_term(lo[a] + i as i64))).collect());
         let keys = simd.pattern.keys();
         let table = simd.pattern.table();
-        let (start, hashes, words) = (&mut self.start, &mut self.hashes, &self.words);
-        start.clear();
-        hashes.clear();
+        let mut start = Vec::with_capacity(cells + 1);
+        let mut hashes = Vec::with_capacity(cells);
         let mut c = lo;
         let mut total = 0u32;
         for _ in 0..cells {
@@ -206,14 +176,22 @@ impl<const D: usize> Region<D> {
             next_cell(&mut c, lo, hi);
         }
         start.push(total);
+        // The jump-ahead constants by point index, padded to whole groups.
+        let groups = simd.points.len().div_ceil(L::N).max(1);
+        let constants = |f: &dyn Fn(&PointConstants<D>) -> (u32, u32)| -> [Vec<u32>; 2] {
+            let mut m = vec![0; groups * L::N];
+            let mut c = vec![0; groups * L::N];
+            for (j, p) in simd.points.iter().enumerate() {
+                (m[j], c[j]) = f(p);
+            }
+            [m, c]
+        };
+        let coordinate: [[Vec<u32>; 2]; D] = std::array::from_fn(|a| constants(&|p| p.coordinate[a]));
+        let id_constants = constants(&|p| p.id);
         let len = total as usize + WIDEST;
-        for v in self.q.iter_mut().chain([&mut self.x_cell]) {
-            v.clear();
-            v.resize(len, 0.0);
-        }
-        self.id.clear();
-        self.id.resize(if ids { len } else { 0 }, 0);
-        let (q, x_cell, id) = (&mut self.q, &mut self.x_cell, &mut self.id);
+        let mut q: [Vec<f32>; D] = std::array::from_fn(|_| vec![0.0; len]);
+        let mut x_cell = vec![0.0; len];
+        let mut id = vec![0; if ids { len } else { 0 }];
         for (i, &h) in hashes.iter().enumerate() {
             let (s, e) = (start[i] as usize, start[i + 1] as usize);
             // Cells are numbered with axis 0 fastest.
@@ -221,14 +199,13 @@ impl<const D: usize> Region<D> {
             let mut j = 0;
             while s + j < e {
                 let at = s + j;
-                let p = &simd.by_index;
                 L::f_store(x, &mut x_cell[at..at + L::N]);
-                for (qa, [m, c]) in q.iter_mut().zip(&p.coordinate) {
+                for (qa, [m, c]) in q.iter_mut().zip(&coordinate) {
                     let state = L::u_add(L::u_mul(L::u_load(&m[j..j + L::N]), hv), L::u_load(&c[j..j + L::N]));
                     L::f_store(L::u24_to_f(L::u_shr8(state)), &mut qa[at..at + L::N]);
                 }
                 if ids {
-                    let [m, c] = &p.id;
+                    let [m, c] = &id_constants;
                     let state = L::u_add(L::u_mul(L::u_load(&m[j..j + L::N]), hv), L::u_load(&c[j..j + L::N]));
                     let mut lanes = [0u32; WIDEST];
                     L::u_store(state, &mut lanes[..L::N]);
@@ -241,17 +218,16 @@ impl<const D: usize> Region<D> {
         }
         // The padding past the last point: zeros, whatever the last group
         // stored there.
-        for v in q.iter_mut().chain([&mut *x_cell]) {
+        for v in q.iter_mut().chain([&mut x_cell]) {
             v[total as usize..].fill(0.0);
         }
         id.truncate(total as usize);
-        self.origin = lo;
-        self.side = side;
+        Region { origin: lo, side, start, q, x_cell, id }
     }
 
     /// The index of cell `c`, which must lie in the region.
     #[inline(always)]
-    pub(super) fn cell(&self, c: [i64; D]) -> usize {
+    fn cell(&self, c: [i64; D]) -> usize {
         let mut i = 0;
         for a in (0..D).rev() {
             i = i * self.side[a] + (c[a] - self.origin[a]) as usize;
@@ -322,7 +298,7 @@ fn point_gap<L: Lanes>(p: L::F, lo: L::F, hi: L::F) -> L::F {
 
 /// A distance (lane units) grown by the slack.
 #[inline(always)]
-pub(super) fn inflate(d: f32) -> f32 {
+fn inflate(d: f32) -> f32 {
     d * (1.0 + SLACK_REL) + SLACK_ABS
 }
 
@@ -1083,7 +1059,7 @@ struct Spill([Cell<f32>; WIDEST]);
 /// The largest value in any lane of `v`, by halving trees (a short chain
 /// of dependent operations: the tile's scan waits for it).
 #[inline(always)]
-pub(super) fn largest<L: Lanes, const K: usize>(mut v: [L::F; K]) -> f32 {
+fn largest<L: Lanes, const K: usize>(mut v: [L::F; K]) -> f32 {
     debug_assert!(K.is_power_of_two() && L::N.is_power_of_two());
     let mut width = K;
     while width > 1 {
@@ -1111,7 +1087,7 @@ fn load<L: Lanes>(v: &[f32], at: usize) -> L::F {
 
 /// Lanes into an array, of which the first `L::N` are set.
 #[inline(always)]
-pub(super) fn lanes_of<L: Lanes>(v: L::F) -> [f32; WIDEST] {
+fn lanes_of<L: Lanes>(v: L::F) -> [f32; WIDEST] {
     let mut a = [0.0; WIDEST];
     L::f_store(v, &mut a[..L::N]);
     a
@@ -1119,7 +1095,7 @@ pub(super) fn lanes_of<L: Lanes>(v: L::F) -> [f32; WIDEST] {
 
 /// Lanes from the first `L::N` of an array.
 #[inline(always)]
-pub(super) fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
+fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
     L::f_load(&a[..L::N])
 }
 
@@ -1127,7 +1103,7 @@ pub(super) fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
 /// false when `c` was the last. A loop over it, rather than a closure
 /// called per cell, keeps the body inline in the run-time AVX-512 copy.
 #[inline(always)]
-pub(super) fn next_cell<const D: usize>(c: &mut [i64; D], lo: [i64; D], hi: [i64; D]) -> bool {
+fn next_cell<const D: usize>(c: &mut [i64; D], lo: [i64; D], hi: [i64; D]) -> bool {
     for a in 0..D {
         c[a] += 1;
         if c[a] <= hi[a] {

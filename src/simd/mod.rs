@@ -112,7 +112,6 @@
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
 mod avx512;
 pub mod batch;
-mod binned;
 pub mod border;
 mod coherent;
 pub mod lanes;
@@ -250,10 +249,6 @@ pub struct Simd<const D: usize, const N: usize> {
     /// What the kernel needs to produce point j of a cell, for every j the
     /// table allows.
     points: Vec<PointConstants<D>>,
-    /// The same constants by point index, point j in element j, padded with
-    /// zeros to whole groups of [`WIDEST`]: what the coherent paths read
-    /// when they generate a cell's points j..j + L::N at once.
-    by_index: ByIndex<D>,
     /// The 3^d block in the mirrored frame (see `search`).
     block: Vec<[i64; D]>,
     /// How many leading cells of `block` have no far axis.
@@ -364,30 +359,6 @@ struct PointConstants<const D: usize> {
     wide: WideConstants<D>,
 }
 
-/// The jump-ahead constants (A_k, C_k) of every point index, as the
-/// multipliers and the addends of the ID state and of each coordinate state:
-/// element j is point j's (see [`Simd`]'s `by_index`).
-#[derive(Clone, Debug)]
-struct ByIndex<const D: usize> {
-    id: [Vec<u32>; 2],
-    coordinate: [[Vec<u32>; 2]; D],
-}
-
-impl<const D: usize> ByIndex<D> {
-    fn new(points: &[PointConstants<D>]) -> Self {
-        let len = points.len().div_ceil(WIDEST).max(1) * WIDEST;
-        let pad = |v: Vec<u32>| -> Vec<u32> {
-            let mut v = v;
-            v.resize(len, 0);
-            v
-        };
-        let split = |f: &dyn Fn(&PointConstants<D>) -> (u32, u32)| -> [Vec<u32>; 2] {
-            [pad(points.iter().map(|p| f(p).0).collect()), pad(points.iter().map(|p| f(p).1).collect())]
-        };
-        ByIndex { id: split(&|p| p.id), coordinate: std::array::from_fn(|a| split(&|p| p.coordinate[a])) }
-    }
-}
-
 /// One value in every lane of the widest lane set.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
@@ -435,7 +406,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let table = *pattern.table().entries();
         let most = pattern.table().max_population();
         let sorted = table.windows(2).all(|w| w[0] <= w[1]);
-        let points: Vec<PointConstants<D>> = (0..most)
+        let points = (0..most)
             .map(|j| {
                 let base = 1 + j * (D as u32 + 1);
                 // In a sorted table, point j exists where the state's top
@@ -452,11 +423,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 }
             })
             .collect();
-        let by_index = ByIndex::new(&points);
         let block = logical_block::<D>();
         let near = block.iter().take_while(|o| o.iter().all(|&v| v <= 0)).count();
         let inv_scale = (1.0 / pattern.scale()) as f32;
-        Ok(Simd { config, pattern, outputs, table, sorted, points, by_index, block, near, inv_scale })
+        Ok(Simd { config, pattern, outputs, table, sorted, points, block, near, inv_scale })
     }
 
     /// The configuration.
