@@ -61,10 +61,17 @@
 //! recompiled for AVX2 when the CPU has it ([`simd::runtime_avx2`]), and
 //! Euclidean slices in sixteen AVX-512 lanes when the CPU has AVX-512
 //! ([`simd::runtime_avx512`]).
-//! [`simd_level`] says which path a call takes:
+//! [`simd_level`] says which path a call takes. The environment variable
+//! `WORLEY_SIMD` (`sse2`, `avx2`, `avx512`, `auto`) or
+//! [`simd::set_simd_cap`] puts a ceiling on the run-time choices, so one
+//! machine measures each level it has (the same bits at every level;
+//! instructions compiled in stay):
 //!
 //! ```
+//! use worley::simd::{set_simd_cap, SimdCap};
+//! let before = set_simd_cap(SimdCap::Avx2); // what a CPU without AVX-512 runs
 //! println!("worley runs {}", worley::simd_level());
+//! set_simd_cap(before);
 //! ```
 //!
 //! # Guarantees, and the test that enforces each

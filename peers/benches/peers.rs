@@ -529,11 +529,13 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
          median M samples/s of 15 round-robin rounds after 3 unmeasured"
     );
     println!(
-        "build: RUSTFLAGS={:?}; compiled with avx2: {}, fma: {}, avx512f: {}; worley runs: {}",
+        "build: RUSTFLAGS={:?}; compiled with avx2: {}, fma: {}, avx512f: {}; ceiling {:?} (WORLEY_SIMD={:?}); worley runs: {}",
         std::env::var("RUSTFLAGS").unwrap_or_default(),
         cfg!(target_feature = "avx2"),
         cfg!(target_feature = "fma"),
         cfg!(target_feature = "avx512f"),
+        worley::simd::simd_cap(),
+        std::env::var("WORLEY_SIMD").unwrap_or_default(),
         worley::simd_level()
     );
     println!("| case | contestant | M samples/s | / quick-noise F1 | / simdnoise |");

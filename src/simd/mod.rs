@@ -115,6 +115,7 @@ pub mod batch;
 pub mod border;
 mod coherent;
 pub mod lanes;
+mod level;
 pub mod periodic;
 
 pub use batch::{Grid, Point, SizeError, TILE};
@@ -124,6 +125,7 @@ pub(crate) use coherent::GridRows;
 pub(crate) use coherent::BAND;
 #[cfg(not(feature = "parallel"))]
 pub(crate) use coherent::SERIAL_BAND;
+pub use level::{runtime_avx2, runtime_avx512, set_simd_cap, simd_cap, simd_level, SimdCap};
 pub use periodic::{Period, PeriodError, MAX_PERIOD};
 
 use std::cell::Cell;
@@ -133,61 +135,6 @@ use crate::config::{Config, ConfigError, Metric, Mode};
 use crate::definition::{axis_term, lcg_jump, Pattern, AXIS_MUL, FRACTION_BITS, INVALID_ID, TABLE_SIZE};
 use crate::reference::{shell, MAX_SHELLS};
 use lanes::{Eight, Lanes, One, WIDEST};
-
-/// The SIMD instructions the kernels run: those compiled in, or AVX-512 and
-/// AVX2 chosen at run time in a build without them (see [`runtime_avx512`]
-/// and [`runtime_avx2`]).
-pub fn simd_level() -> &'static str {
-    if cfg!(target_feature = "avx512f") {
-        "avx512f (slices and grid tiles in 16 lanes of 512 bits; 8-lane calls on AVX2 paths)"
-    } else if runtime_avx512() {
-        "avx512f at run time (a build without it: Euclidean slices and grid tiles run 16 AVX-512 lanes chosen because the CPU has them; Euclidean 8-lane calls run their AVX2 copy)"
-    } else if cfg!(target_feature = "avx2") {
-        "avx2"
-    } else if runtime_avx2() {
-        "avx2 at run time (an sse2 build: its Euclidean 8-lane kernels are recompiled for AVX2 and chosen because the CPU has it)"
-    } else if cfg!(target_feature = "sse4.1") {
-        "sse4.1"
-    } else if cfg!(target_feature = "sse2") {
-        "sse2 (default x86_64 build: 8-lane integer ops are split or emulated)"
-    } else {
-        "scalar fallback"
-    }
-}
-
-/// Whether 8-lane calls run the kernel recompiled for AVX2 at run time:
-/// true when this build was compiled without AVX2, the target is x86_64 and
-/// the CPU has AVX2. A build with AVX2 compiled in (or any other target)
-/// always runs its own instructions and gives false.
-pub fn runtime_avx2() -> bool {
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx2"))))]
-    {
-        false
-    }
-}
-
-/// Whether [`Simd::evaluate_slice`] runs the Euclidean kernel in sixteen
-/// lanes compiled for AVX-512 at run time: true when this build was
-/// compiled without AVX-512, the target is x86_64 and the CPU reports
-/// AVX-512 (F, BW, DQ and VL, the x86-64-v4 set). A build with AVX-512
-/// compiled in runs its own sixteen lanes and gives false.
-pub fn runtime_avx512() -> bool {
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512bw")
-            && std::arch::is_x86_feature_detected!("avx512dq")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-    }
-    #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx512f"))))]
-    {
-        false
-    }
-}
 
 /// `[f(0), f(1), …, f(D − 1)]` (`D ≥ 1`; per axis, or per order where a
 /// `Best` is built): `array::from_fn` as a counted loop. The kernel uses it,

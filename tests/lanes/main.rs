@@ -9,4 +9,5 @@
 //! compile time), and each of those builds then compiles only what it runs.
 
 mod hard_cases;
+mod levels;
 mod simd;
