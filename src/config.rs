@@ -110,7 +110,8 @@ impl Metric {
         }
     }
 
-    /// A short name for tables and file names.
+    /// A short name for file names: `minkowski3` without the colon that
+    /// [`Display`](fmt::Display) writes (the spelling [`str::parse`] reads).
     pub fn name(self) -> String {
         match self {
             Metric::Euclidean => "euclidean".into(),
@@ -146,9 +147,15 @@ impl std::str::FromStr for Metric {
     }
 }
 
+/// The command line's spelling, which [`str::parse`] reads back:
+/// `euclidean`, `manhattan`, `chebyshev`, `minkowski:P` (P in Rust's
+/// shortest round-trip form).
 impl fmt::Display for Metric {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.name())
+        match self {
+            Metric::Minkowski(p) => write!(f, "minkowski:{p}"),
+            m => f.write_str(&m.name()),
+        }
     }
 }
 
@@ -287,6 +294,23 @@ impl std::error::Error for ConfigError {}
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn metrics_round_trip_through_their_text() {
+        let exponents = [1.0, 1.5, 2.0, 3.0, 0.1 + 0.2 + 1.0, 1e6, 7.000000000000001];
+        let metrics = [Metric::Euclidean, Metric::Manhattan, Metric::Chebyshev]
+            .into_iter()
+            .chain(exponents.map(Metric::Minkowski));
+        for m in metrics {
+            let text = m.to_string();
+            assert_eq!(text.parse::<Metric>(), Ok(m), "{text}");
+            assert!(!m.name().contains(':'), "{}", m.name());
+        }
+        assert_eq!(Metric::Minkowski(3.0).to_string(), "minkowski:3");
+        // The error names what the user wrote.
+        let e = "minkowski3".parse::<Metric>().unwrap_err();
+        assert!(e.contains("'minkowski3'"), "{e}");
+    }
 
     #[test]
     fn invalid_configurations_are_rejected_with_the_reason() {

@@ -131,6 +131,11 @@ pub mod reference;
 pub mod simd;
 pub mod texture;
 
+/// The lane types of the 8-lane API (`f32x8`, `u32x8` in [`Features8`],
+/// [`Border8`], [`Simd::evaluate_lanes`]), from the `wide` version this
+/// crate is built with, so a caller needs no matching dependency of its own.
+pub use wide;
+
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Border, Features, Reference};

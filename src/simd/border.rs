@@ -105,6 +105,27 @@ pub struct Border8<const D: usize> {
     pub neighbour: u32x8,
 }
 
+/// No border found: distance +∞, normal NaN, [`INVALID_ID`] for both IDs
+/// (what a window-mode search reports when its block holds fewer than two
+/// points). A value to fill the buffers of the slice and grid calls with.
+impl<const D: usize> Default for Border32<D> {
+    fn default() -> Self {
+        Border32 { distance: f32::INFINITY, normal: [f32::NAN; D], feature: INVALID_ID, neighbour: INVALID_ID }
+    }
+}
+
+/// Every lane [`Border32::default`].
+impl<const D: usize> Default for Border8<D> {
+    fn default() -> Self {
+        Border8 {
+            distance: f32x8::splat(f32::INFINITY),
+            normal: [f32x8::splat(f32::NAN); D],
+            feature: u32x8::splat(INVALID_ID),
+            neighbour: u32x8::splat(INVALID_ID),
+        }
+    }
+}
+
 impl<const D: usize> Border8<D> {
     /// Lane `i` (0..8).
     pub fn lane(&self, i: usize) -> Border32<D> {

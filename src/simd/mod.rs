@@ -183,6 +183,55 @@ pub struct Features8<const D: usize, const N: usize> {
     pub id: [u32x8; N],
 }
 
+/// No feature point found: distances +∞, zero deltas, [`INVALID_ID`], what
+/// a window-mode search reports for an F_k its block lacks. A value to fill
+/// the buffers of the slice and grid calls with.
+///
+/// ```
+/// use worley::{Features32, Simd, Config, Outputs};
+/// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Ids).unwrap();
+/// let mut out = vec![Features32::<2, 1>::default(); 4];
+/// basis.evaluate_slice(&[[0.5, 0.5]; 4], &mut out).unwrap();
+/// assert_eq!(out[3], basis.evaluate([0.5, 0.5]));
+/// ```
+impl<const D: usize, const N: usize> Default for Features32<D, N> {
+    fn default() -> Self {
+        Features32 { distance: [f32::INFINITY; N], delta: [[0.0; D]; N], id: [INVALID_ID; N] }
+    }
+}
+
+/// Every lane [`Features32::default`].
+impl<const D: usize, const N: usize> Default for Features8<D, N> {
+    fn default() -> Self {
+        Features8 {
+            distance: [f32x8::splat(f32::INFINITY); N],
+            delta: [[f32x8::splat(0.0); D]; N],
+            id: [u32x8::splat(INVALID_ID); N],
+        }
+    }
+}
+
+impl<const D: usize, const N: usize> Features8<D, N> {
+    /// Lane `i` (0..8), as [`lane`] gives it.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Ids).unwrap();
+    /// let points: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64 * 0.3, 0.1, 2.0]);
+    /// let f = basis.evaluate8(&points);
+    /// assert_eq!(f.lane(5), basis.evaluate(points[5]));
+    /// assert_eq!(f.lanes()[7], f.lane(7));
+    /// ```
+    pub fn lane(&self, i: usize) -> Features32<D, N> {
+        lane(self, i)
+    }
+
+    /// Every lane.
+    pub fn lanes(&self) -> [Features32<D, N>; 8] {
+        std::array::from_fn(|i| lane(self, i))
+    }
+}
+
 /// The 8-lane evaluator for dimension `D` and order `N` (F1..FN).
 #[derive(Clone, Debug)]
 pub struct Simd<const D: usize, const N: usize> {
