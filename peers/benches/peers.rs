@@ -247,11 +247,9 @@ struct Entry<'a> {
 /// 15 measured, medians.
 fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let frame_pts = frame();
-    let frames: [(&'static str, Vec<[f32; 3]>); 3] = [
-        ("frame", frame_pts.clone()),
-        ("frame-shuffled", shuffled(&frame_pts)),
-        ("frame-fine", frame_pts.iter().map(|p| p.map(|v| v * 8.0)).collect()),
-    ];
+    // In the order of `names` below.
+    let frames: [Vec<[f32; 3]>; 3] =
+        [frame_pts.clone(), shuffled(&frame_pts), frame_pts.iter().map(|p| p.map(|v| v * 8.0)).collect()];
     use quick_noise::simd::SimdSliceIterExt;
     let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
     let f2 = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::Distances).unwrap();
@@ -292,7 +290,7 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let (mut o1_2d, mut o1_4d) = (vec![[0f32; 1]; n], vec![[0f32; 1]; n]);
     let (mut border_g, mut border_r) = (vec![border.border([0.0; 3]); n], vec![border.border([0.0; 3]); random.len()]);
     // The frames: every contestant on the same hits.
-    let frame_axes: Vec<[Vec<f32>; 3]> = frames.iter().map(|(_, pts)| axes(pts)).collect();
+    let frame_axes: Vec<[Vec<f32>; 3]> = frames.iter().map(|pts| axes(pts)).collect();
     let m = frame_pts.len();
     let mut frame_out: Vec<(Vec<f32>, Vec<f32>, Vec<f32>)> =
         (0..3).map(|_| (vec![0f32; m], vec![0f32; m], vec![0f32; m])).collect();
@@ -461,7 +459,7 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         .zip(frame_crackle.iter_mut())
         .enumerate()
     {
-        let pts: &[[f32; 3]] = &frames[k].1;
+        let pts: &[[f32; 3]] = &frames[k];
         let [c1, c2] = names[k];
         add(&mut entries, "quick-noise 0.3 F1", c1, m, Box::new(move || quick(xs, q)));
         if simd_ok {

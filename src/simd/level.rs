@@ -9,9 +9,10 @@
 //! choices, so one machine can measure every level it has: the environment
 //! variable `WORLEY_SIMD` (`sse2`, `avx2`, `avx512` or `auto`), read once
 //! at the first call that asks, or [`set_simd_cap`] at any time. Every
-//! level gives the same bits (a unit test runs slices and grids at each
-//! level the CPU has, `tests/lanes/levels.rs`); a ceiling above the CPU's features changes nothing,
-//! and no ceiling can lower what the build compiled in.
+//! level gives the same bits (`tests/lanes/levels.rs` runs slices, grids
+//! and eight-lane calls at each level the CPU has); a ceiling above the
+//! CPU's features changes nothing, and no ceiling can lower what the build
+//! compiled in.
 
 use std::sync::atomic::{AtomicU8, Ordering};
 
@@ -57,6 +58,11 @@ fn encode(cap: SimdCap) -> u8 {
     1 + cap as u8
 }
 
+/// The ceiling `encode` stored, or `None` while none is.
+fn decode(v: u8) -> Option<SimdCap> {
+    [SimdCap::Sse2, SimdCap::Avx2, SimdCap::Avx512].into_iter().find(|&c| encode(c) == v)
+}
+
 /// Sets the ceiling on the run-time choices for every later call on every
 /// thread; returns the one it replaces. Calls already running finish on
 /// the path they took.
@@ -68,9 +74,10 @@ fn encode(cap: SimdCap) -> u8 {
 /// set_simd_cap(before);
 /// ```
 pub fn set_simd_cap(cap: SimdCap) -> SimdCap {
-    let before = simd_cap();
-    CAP.store(encode(cap), Ordering::Relaxed);
-    before
+    // Read first, so that the ceiling replaced is the environment's when
+    // nothing was set before.
+    simd_cap();
+    decode(CAP.swap(encode(cap), Ordering::Relaxed)).unwrap_or(SimdCap::Avx512)
 }
 
 /// The ceiling in force: the last [`set_simd_cap`], or else `WORLEY_SIMD`
@@ -78,11 +85,9 @@ pub fn set_simd_cap(cap: SimdCap) -> SimdCap {
 /// [`SimdCap::parse`] does not know, means [`SimdCap::Avx512`]: no
 /// ceiling).
 pub fn simd_cap() -> SimdCap {
-    match CAP.load(Ordering::Relaxed) {
-        1 => SimdCap::Sse2,
-        2 => SimdCap::Avx2,
-        3 => SimdCap::Avx512,
-        _ => {
+    match decode(CAP.load(Ordering::Relaxed)) {
+        Some(cap) => cap,
+        None => {
             let cap = std::env::var("WORLEY_SIMD").ok().and_then(|v| SimdCap::parse(&v)).unwrap_or(SimdCap::Avx512);
             // A concurrent `set_simd_cap` wins over the environment.
             let _ = CAP.compare_exchange(0, encode(cap), Ordering::Relaxed, Ordering::Relaxed);
