@@ -199,7 +199,12 @@ impl fmt::Display for Mode {
 pub struct Config {
     /// Any 64-bit seed; every seed gives a different pattern.
     pub seed: u64,
-    /// n: F1..Fn are computed (1 ..= [`MAX_ORDER`]).
+    /// n: F1..Fn are computed (1 ..= [`MAX_ORDER`]). Read by
+    /// [`Reference`](crate::Reference) and the command line; the typed
+    /// evaluators take their order from their type instead (`N` of
+    /// [`Simd<D, N>`](crate::Simd) and [`Texture<D, N>`](crate::texture::Texture),
+    /// 1 for [`SimdBorder`](crate::SimdBorder)) and set this field to it,
+    /// whatever it held.
     pub order: usize,
     /// The distance metric.
     pub metric: Metric,
@@ -249,13 +254,6 @@ pub enum ConfigError {
     Density(f64),
     /// The bump fraction is outside [0, 1] or NaN.
     Bump(f64),
-    /// An evaluator compiled for order `compiled` was given another order.
-    OrderMismatch {
-        /// The configuration's order.
-        asked: usize,
-        /// The evaluator's compile-time order.
-        compiled: usize,
-    },
     /// The distance to the cell's border was asked under a metric other
     /// than the Euclidean one, whose bisectors are not planes.
     BorderMetric(Metric),
@@ -277,9 +275,6 @@ impl fmt::Display for ConfigError {
             ),
             ConfigError::Bump(b) => {
                 write!(f, "bump fraction {b} is out of range: use 0 to 1")
-            }
-            ConfigError::OrderMismatch { asked, compiled } => {
-                write!(f, "order {asked} asked of an evaluator compiled for order {compiled}: use order {compiled}")
             }
             ConfigError::BorderMetric(m) => write!(
                 f,

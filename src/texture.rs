@@ -338,7 +338,9 @@ pub struct Texture<const D: usize, const N: usize> {
 }
 
 impl<const D: usize, const N: usize> Texture<D, N> {
-    /// Builds a texture. `config.order` is set to `N`. With a period, the
+    /// Builds a texture on F1..FN. The order is the type's `N`, as for
+    /// every typed evaluator: `config.order` is set to `N` whatever it held
+    /// ([`Config::order`]). With a period, the
     /// texture is addressed in cells (see [`crate::simd::periodic`]) and
     /// the lacunarity must be a whole number.
     ///
@@ -897,9 +899,11 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         frequency: f64,
         period: Option<Period<D>>,
     ) -> Border8<D> {
-        match self.octave(x, frequency, period) {
-            (y, Some(p)) => border.border8_periodic(&y, &p),
-            (y, None) => border.border8(&y),
+        match (self.octave(x, frequency, period), one_point(x)) {
+            ((y, Some(p)), true) => Border8::splat(&border.border_periodic(y[0], &p)),
+            ((y, None), true) => Border8::splat(&border.border(y[0])),
+            ((y, Some(p)), false) => border.border8_periodic(&y, &p),
+            ((y, None), false) => border.border8(&y),
         }
     }
 
@@ -912,9 +916,11 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         frequency: f64,
         period: Option<Period<D>>,
     ) -> Features8<D, N> {
-        match self.octave(x, frequency, period) {
-            (y, Some(p)) => kernel.evaluate8_periodic(&y, &p),
-            (y, None) => kernel.evaluate8(&y),
+        match (self.octave(x, frequency, period), one_point(x)) {
+            ((y, Some(p)), true) => Features8::splat(&kernel.evaluate_periodic(y[0], &p)),
+            ((y, None), true) => Features8::splat(&kernel.evaluate(y[0])),
+            ((y, Some(p)), false) => kernel.evaluate8_periodic(&y, &p),
+            ((y, None), false) => kernel.evaluate8(&y),
         }
     }
 
@@ -939,6 +945,16 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             _ => (x.map(|q| q.map(|v| v * frequency)), None),
         }
     }
+}
+
+/// Whether the eight lanes hold one point (the one-point calls, `value`,
+/// `filtered`, `gradient`, spread it so): the kernel then runs its one-lane
+/// instantiation and spreads the result, the same bits at an eighth of the
+/// search.
+#[inline(always)]
+fn one_point<const D: usize>(x: &[[f64; D]; 8]) -> bool {
+    let first = x[0].map(f64::to_bits);
+    x[1..].iter().all(|q| q.map(f64::to_bits) == first)
 }
 
 /// ∇F_k per lane for the metric, from F_k and its delta (sample − point),

@@ -65,7 +65,7 @@
 use wide::{f32x8, u32x8};
 
 use super::batch::in_cell;
-use super::lanes::{Eight, Lanes, WIDEST};
+use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::periodic::wrap;
 use super::{outside, per_axis, words, Best, Grid, Located, Outputs, Period, Point, Simd, SizeError, UNIT, WHOLE};
 use crate::config::{Config, ConfigError, Metric, Mode};
@@ -141,6 +141,16 @@ impl<const D: usize> Border8<D> {
     pub fn lanes(&self) -> [Border32<D>; 8] {
         std::array::from_fn(|i| self.lane(i))
     }
+
+    /// One sample's border in all eight lanes.
+    pub fn splat(b: &Border32<D>) -> Self {
+        Border8 {
+            distance: f32x8::splat(b.distance),
+            normal: b.normal.map(f32x8::splat),
+            feature: u32x8::splat(b.feature),
+            neighbour: u32x8::splat(b.neighbour),
+        }
+    }
 }
 
 /// The distance to the border of the sample's Voronoi cell, eight samples
@@ -188,7 +198,9 @@ impl<L: Lanes, const D: usize> Plane<L, D> {
 }
 
 impl<const D: usize> SimdBorder<D> {
-    /// Builds the evaluator; `config.order` does not matter.
+    /// Builds the evaluator. Its order is 1 (F1's point and its nearest
+    /// bisector), as the typed evaluators take theirs from their type:
+    /// `config.order` is set to 1 whatever it held ([`Config::order`]).
     ///
     /// # Errors
     /// [`ConfigError::BorderMetric`] unless the metric is Euclidean, or the
@@ -211,9 +223,10 @@ impl<const D: usize> SimdBorder<D> {
         self.kernel.config()
     }
 
-    /// One sample: lane 0 of [`SimdBorder::border8`] of it.
+    /// One sample, through the kernel's one-lane instantiation: the bits of
+    /// its lane in [`SimdBorder::border8`] at the cost of one sample.
     pub fn border(&self, x: [f64; D]) -> Border32<D> {
-        self.border8(&[x; 8]).lane(0)
+        self.one(&self.kernel.locate::<One>(&[x]))
     }
 
     /// Eight samples, one per lane.
@@ -225,7 +238,7 @@ impl<const D: usize> SimdBorder<D> {
     /// assert_eq!(border.border8(&x).lane(5), border.border(x[5]));
     /// ```
     pub fn border8(&self, x: &[[f64; D]; 8]) -> Border8<D> {
-        self.at(&self.kernel.locate::<Eight>(x))
+        self.eight(&self.kernel.locate::<Eight>(x))
     }
 
     /// Eight samples as lanes per axis (each lane's f32 coordinates, as
@@ -238,23 +251,23 @@ impl<const D: usize> SimdBorder<D> {
     /// One sample given as a cell and the fraction within it, as
     /// [`Simd::evaluate_in_cell`] takes it (bad input as there).
     pub fn border_in_cell(&self, cell: [i64; D], fraction: [f32; D]) -> Border32<D> {
-        self.border8_in_cell(&[cell; 8], &[fraction; 8]).lane(0)
+        self.one(&in_cell::<One, D>(&[cell], &[fraction]))
     }
 
     /// Eight samples given as cells and fractions.
     pub fn border8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8]) -> Border8<D> {
-        self.at(&in_cell::<Eight, D>(cells, fractions))
+        self.eight(&in_cell::<Eight, D>(cells, fractions))
     }
 
     /// One sample of the periodic pattern, `x` in cells, as
     /// [`Simd::evaluate_periodic`] takes it.
     pub fn border_periodic(&self, x: [f64; D], period: &Period<D>) -> Border32<D> {
-        self.border8_periodic(&[x; 8], period).lane(0)
+        self.one(&wrap::<One, D>(&[x], period))
     }
 
     /// Eight samples of the periodic pattern, `x` in cells.
     pub fn border8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>) -> Border8<D> {
-        self.at(&wrap::<Eight, D>(x, period))
+        self.eight(&wrap::<Eight, D>(x, period))
     }
 
     /// Many points into a caller's buffer, eight at a time.
@@ -308,26 +321,60 @@ impl<const D: usize> SimdBorder<D> {
         grid.fill_by_eights(out, |block| self.border8(block).lanes())
     }
 
-    /// F1, then the border search, for located lanes.
-    fn at(&self, at: &Located<Eight, D>) -> Border8<D> {
+    /// Eight located lanes: F1 and the border search through the kernel's
+    /// eight-lane dispatch (its AVX2 copy where that runs).
+    fn eight(&self, at: &Located<Eight, D>) -> Border8<D> {
         let k = &self.kernel;
         let (_, _, raw) = k.dispatch8_stage::<WHOLE>(at, Best::empty());
         let (plane, found) = k.border_search8(at, &raw);
+        let r = Self::result::<Eight>(k, at, &raw, &plane, found);
+        Border8 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
+    }
+
+    /// One located sample, in the one-lane instantiation: the same
+    /// operations per lane as [`SimdBorder::eight`], so the same bits.
+    fn one(&self, at: &Located<One, D>) -> Border32<D> {
+        let k = &self.kernel;
+        let (_, _, raw) = k.dispatch_stage::<One, WHOLE>(at, Best::empty());
+        let (plane, found) = k.border_search::<One>(at, &raw);
+        let r = Self::result::<One>(k, at, &raw, &plane, found);
+        Border32 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
+    }
+
+    /// The border, its normal and the two IDs from F1 (`raw`, as the
+    /// kernel holds it) and the nearest plane; NaN and [`INVALID_ID`] for
+    /// lanes without a result.
+    #[inline(always)]
+    fn result<L: Lanes>(
+        k: &Simd<D, 1>,
+        at: &Located<L, D>,
+        raw: &Best<L, D, 1>,
+        plane: &Plane<L, D>,
+        found: L::M,
+    ) -> Lanewise<L, D> {
         let b = plane.distance();
-        let good = Eight::and(found, k.good_lanes::<Eight>(at, raw.rank[0], b));
-        let scale = Eight::mul(Eight::f(1.0 / UNIT), Eight::f(k.inv_scale));
-        let distance = Eight::mul(b, scale);
-        let length = Eight::mul(Eight::sqrt(plane.uu), Eight::f(UNIT));
+        let good = L::and(found, k.good_lanes::<L>(at, raw.rank[0], b));
+        let scale = L::mul(L::f(1.0 / UNIT), L::f(k.inv_scale));
+        let distance = L::mul(b, scale);
+        let length = L::mul(L::sqrt(plane.uu), L::f(UNIT));
         // No normal without a plane (+∞ in window mode with one point).
-        let planar = Eight::and(good, Eight::lt(b, Eight::f(f32::INFINITY)));
-        let normal = per_axis(|a| Eight::select(planar, -plane.u[a] / length, Eight::f(f32::NAN)));
-        Border8 {
-            distance: Eight::select(good, distance, Eight::f(f32::NAN)),
+        let planar = L::and(good, L::lt(b, L::f(f32::INFINITY)));
+        let normal = per_axis(|a| L::select(planar, L::div(L::neg(plane.u[a]), length), L::f(f32::NAN)));
+        Lanewise {
+            distance: L::select(good, distance, L::f(f32::NAN)),
             normal,
-            feature: Eight::select_u(good, raw.id[0], Eight::u(INVALID_ID)),
-            neighbour: Eight::select_u(good, plane.id, Eight::u(INVALID_ID)),
+            feature: L::select_u(good, raw.id[0], L::u(INVALID_ID)),
+            neighbour: L::select_u(good, plane.id, L::u(INVALID_ID)),
         }
     }
+}
+
+/// [`Border8`]'s fields in any lane set.
+struct Lanewise<L: Lanes, const D: usize> {
+    distance: L::F,
+    normal: [L::F; D],
+    feature: L::U,
+    neighbour: L::U,
 }
 
 impl<const D: usize> Simd<D, 1> {

@@ -70,6 +70,8 @@ pub trait Lanes: Copy + 'static {
     }
     /// a − b
     fn sub(a: Self::F, b: Self::F) -> Self::F;
+    /// −a (the sign flipped, as scalar negation flips it: −0 from 0)
+    fn neg(a: Self::F) -> Self::F;
     /// a · b (rounded once; never fused)
     fn mul(a: Self::F, b: Self::F) -> Self::F;
     /// a / b (correctly rounded; no approximate reciprocal)
@@ -182,6 +184,10 @@ impl Lanes for One {
     #[inline(always)]
     fn sub(a: f32, b: f32) -> f32 {
         a - b
+    }
+    #[inline(always)]
+    fn neg(a: f32) -> f32 {
+        -a
     }
     #[inline(always)]
     fn mul(a: f32, b: f32) -> f32 {
@@ -376,6 +382,10 @@ macro_rules! wide_lanes {
             #[inline(always)]
             fn sub(a: $f, b: $f) -> $f {
                 a - b
+            }
+            #[inline(always)]
+            fn neg(a: $f) -> $f {
+                -a
             }
             #[inline(always)]
             fn mul(a: $f, b: $f) -> $f {

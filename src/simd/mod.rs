@@ -230,6 +230,15 @@ impl<const D: usize, const N: usize> Features8<D, N> {
     pub fn lanes(&self) -> [Features32<D, N>; 8] {
         std::array::from_fn(|i| lane(self, i))
     }
+
+    /// One sample's features in all eight lanes.
+    pub fn splat(f: &Features32<D, N>) -> Self {
+        Features8 {
+            distance: f.distance.map(f32x8::splat),
+            delta: f.delta.map(|d| d.map(f32x8::splat)),
+            id: f.id.map(u32x8::splat),
+        }
+    }
 }
 
 /// The 8-lane evaluator for dimension `D` and order `N` (F1..FN).
@@ -381,23 +390,23 @@ const ROUNDING: f64 = 6_755_399_441_055_744.0;
 const FAST_RANGE: f64 = 2_147_483_645.0;
 
 impl<const D: usize, const N: usize> Simd<D, N> {
-    /// Builds the evaluator. `config.order` must equal `N`.
+    /// Builds the evaluator of F1..FN. The order is the type's `N`, as for
+    /// every typed evaluator: `config.order` is set to `N` whatever it held
+    /// ([`Config::order`]).
     ///
     /// # Errors
-    /// The first invalid field of `config`, or an order that differs from `N`.
+    /// The first invalid field of `config` ([`ConfigError::Order`] if `N`
+    /// is 0 or above [`crate::MAX_ORDER`]).
     ///
     /// ```
-    /// use worley::{Config, ConfigError, Outputs, Simd};
-    /// let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
-    /// assert_eq!(f1.outputs(), Outputs::Distances);
-    /// // The order is a const generic: a config asking for another is an error.
-    /// let wrong = Simd::<3, 1>::new(Config { order: 2, ..Config::default() }, Outputs::Ids);
-    /// assert!(matches!(wrong, Err(ConfigError::OrderMismatch { asked: 2, compiled: 1 })));
+    /// use worley::{Config, Outputs, Simd};
+    /// let f2 = Simd::<3, 2>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert_eq!(f2.outputs(), Outputs::Distances);
+    /// // The order is the const generic.
+    /// assert_eq!(f2.config().order, 2);
     /// ```
     pub fn new(config: Config, outputs: Outputs) -> Result<Self, ConfigError> {
-        if config.order != N {
-            return Err(ConfigError::OrderMismatch { asked: config.order, compiled: N });
-        }
+        let config = Config { order: N, ..config };
         let pattern = Pattern::<D>::new(&config)?;
         let table = *pattern.table().entries();
         let most = pattern.table().max_population();

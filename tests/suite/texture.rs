@@ -404,3 +404,76 @@ fn texture_grids_give_each_points_value_on_every_path() {
         &Grid { origin: [1e300, f64::NAN], step: [1e299, 0.1], size: [9, 2] },
     );
 }
+
+/// Every one-point call against its lane of the eight-lane call, where the
+/// other seven lanes hold other points (so the eight-lane kernel runs, while
+/// the one-point call runs the one-lane kernel): bit for bit, bad input
+/// included.
+fn one_point_is_its_lane<const D: usize, const N: usize>(t: &Texture<D, N>, points: &[[f64; D]], width: f32) {
+    for (i, x) in points.iter().enumerate() {
+        let mut eight: [[f64; D]; 8] = std::array::from_fn(|k| points[(i + 3 * k + 1) % points.len()]);
+        let lane = i % 8;
+        eight[lane] = *x;
+        let what = format!("{} at {x:?}", t.combination().name());
+        let bits = |v: f32| v.to_bits();
+        assert_eq!(bits(t.value(*x)), bits(t.value8(&eight).to_array()[lane]), "value, {what}");
+        let wide = [width; 8];
+        assert_eq!(bits(t.filtered(*x, width)), bits(t.filtered8(&eight, wide).to_array()[lane]), "filtered, {what}");
+        let (sample, gradient) = t.gradient(*x);
+        let g8 = t.gradient8(&eight);
+        assert_eq!(bits(sample.value), bits(g8.value.to_array()[lane]), "gradient's value, {what}");
+        assert_eq!(sample.defined, g8.defined[lane], "gradient defined, {what}");
+        let lanes: [f32; D] = std::array::from_fn(|a| g8.gradient[a].to_array()[lane]);
+        assert_eq!(gradient.map(bits), lanes.map(bits), "gradient, {what}");
+    }
+}
+
+#[test]
+fn one_point_calls_give_the_bits_of_their_lane_among_eight() {
+    let c = Config { seed: 9, ..Config::default() };
+    let mut points: Vec<[f64; 3]> = (0..200).map(|i| std::array::from_fn(|a| 40.0 * uniform(5, (3 * i + a) as u64) - 20.0)).collect();
+    points.extend([[f64::NAN, 0.0, 1.0], [f64::INFINITY, 2.0, 0.0], [1e300, 0.0, 0.0], [0.0, 0.0, 0.0], [3.0, -2.0, 7.0]]);
+    let crackle = Texture::<3, 2>::new(c, Combination::crackle(), Fractal::octaves(4), None).unwrap();
+    one_point_is_its_lane(&crackle, &points, 0.0);
+    one_point_is_its_lane(&crackle, &points, 0.3);
+    let border = Texture::<3, 1>::new(c, Combination::Border, Fractal::octaves(3), None).unwrap();
+    one_point_is_its_lane(&border, &points, 0.0);
+    let manhattan = Config { metric: Metric::Manhattan, ..c };
+    let product = Texture::<3, 2>::new(manhattan, Combination::Product, Fractal::octaves(2), None).unwrap();
+    one_point_is_its_lane(&product, &points, 0.05);
+    // Periodic: addressed in cells, the wrap taken per lane.
+    let period = Some(Period::new([4, 5, 3]).unwrap());
+    let tiled = Texture::<3, 2>::new(c, Combination::crackle(), Fractal::octaves(3), period).unwrap();
+    one_point_is_its_lane(&tiled, &points, 0.0);
+    let tiled_border = Texture::<3, 1>::new(c, Combination::Border, Fractal::octaves(2), period).unwrap();
+    one_point_is_its_lane(&tiled_border, &points, 0.0);
+}
+
+/// The typed evaluators take their order from their type (`N`, 1 for the
+/// border), whatever the configuration says: one rule, the same results.
+#[test]
+fn the_order_is_the_types_whatever_the_configuration_says() {
+    let x = [0.25, -1.5, 3.75];
+    let base = Config { seed: 3, ..Config::default() };
+    let want = Simd::<3, 2>::new(Config { order: 2, ..base }, Outputs::Ids).unwrap().evaluate(x);
+    let crackle = Texture::<3, 2>::new(Config { order: 2, ..base }, Combination::crackle(), Fractal::default(), None)
+        .unwrap()
+        .value(x);
+    let border = worley::SimdBorder::<3>::new(base).unwrap().border(x);
+    for order in [0, 1, 2, 3, worley::MAX_ORDER, worley::MAX_ORDER + 1, usize::MAX] {
+        let config = Config { order, ..base };
+        let simd = Simd::<3, 2>::new(config, Outputs::Ids).unwrap();
+        assert_eq!(simd.config().order, 2, "Simd given order {order}");
+        assert_eq!(simd.evaluate(x), want, "Simd given order {order}");
+        let t = Texture::<3, 2>::new(config, Combination::crackle(), Fractal::default(), None).unwrap();
+        assert_eq!(t.kernel().config().order, 2, "Texture given order {order}");
+        assert_eq!(t.value(x).to_bits(), crackle.to_bits(), "Texture given order {order}");
+        let b = worley::SimdBorder::<3>::new(config).unwrap();
+        assert_eq!(b.config().order, 1, "SimdBorder given order {order}");
+        assert_eq!(b.border(x), border, "SimdBorder given order {order}");
+    }
+    // An order the type cannot have is the configuration error everywhere.
+    assert_eq!(Simd::<3, 0>::new(base, Outputs::Ids).unwrap_err(), worley::ConfigError::Order(0));
+    let too_high = Texture::<3, 17>::new(base, Combination::crackle(), Fractal::default(), None);
+    assert!(matches!(too_high, Err(TextureError::Config(worley::ConfigError::Order(17)))), "{too_high:?}");
+}
