@@ -16,6 +16,43 @@ pub trait Point<const D: usize>: Copy {
     fn coordinates(&self) -> [f64; D];
 }
 
+/// Shades arbitrary points eight at a time, the shape of a renderer's loop
+/// over its hits: `f` gets each block of eight points (a last block of fewer
+/// repeats its last point) and returns eight results, of which those of real
+/// points are written to `out`, in order. On the calling thread.
+///
+/// ```
+/// use worley::{by_eights, Config, Outputs, Simd};
+/// let basis = Simd::<3, 2>::new(Config::default(), Outputs::Ids).unwrap();
+/// let hits: Vec<[f32; 3]> = (0..13).map(|i| [i as f32 * 0.31, 0.5, -2.0]).collect();
+/// let mut crackle = vec![0f32; hits.len()];
+/// by_eights(&hits, &mut crackle, |x| {
+///     let f = basis.evaluate8(x);
+///     (f.distance[1] - f.distance[0]).to_array()
+/// })
+/// .unwrap();
+/// let one = basis.evaluate([12.0 * 0.31f32 as f64, 0.5, -2.0]);
+/// assert_eq!(crackle[12], one.distance[1] - one.distance[0]);
+/// ```
+///
+/// # Errors
+/// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+pub fn by_eights<const D: usize, P: Point<D>, T: Copy>(
+    xs: &[P],
+    out: &mut [T],
+    mut f: impl FnMut(&[[f64; D]; 8]) -> [T; 8],
+) -> Result<(), SizeError> {
+    if out.len() < xs.len() {
+        return Err(SizeError { needed: xs.len(), given: out.len() });
+    }
+    for (chunk, dst) in xs.chunks(8).zip(out.chunks_mut(8)) {
+        let block: [[f64; D]; 8] = std::array::from_fn(|i| chunk[i.min(chunk.len() - 1)].coordinates());
+        let values = f(&block);
+        dst[..chunk.len()].copy_from_slice(&values[..chunk.len()]);
+    }
+    Ok(())
+}
+
 impl<const D: usize> Point<D> for [f64; D] {
     #[inline(always)]
     fn coordinates(&self) -> [f64; D] {

@@ -431,8 +431,15 @@ fn one_point_is_its_lane<const D: usize, const N: usize>(t: &Texture<D, N>, poin
 #[test]
 fn one_point_calls_give_the_bits_of_their_lane_among_eight() {
     let c = Config { seed: 9, ..Config::default() };
-    let mut points: Vec<[f64; 3]> = (0..200).map(|i| std::array::from_fn(|a| 40.0 * uniform(5, (3 * i + a) as u64) - 20.0)).collect();
-    points.extend([[f64::NAN, 0.0, 1.0], [f64::INFINITY, 2.0, 0.0], [1e300, 0.0, 0.0], [0.0, 0.0, 0.0], [3.0, -2.0, 7.0]]);
+    let mut points: Vec<[f64; 3]> =
+        (0..200).map(|i| std::array::from_fn(|a| 40.0 * uniform(5, (3 * i + a) as u64) - 20.0)).collect();
+    points.extend([
+        [f64::NAN, 0.0, 1.0],
+        [f64::INFINITY, 2.0, 0.0],
+        [1e300, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [3.0, -2.0, 7.0],
+    ]);
     let crackle = Texture::<3, 2>::new(c, Combination::crackle(), Fractal::octaves(4), None).unwrap();
     one_point_is_its_lane(&crackle, &points, 0.0);
     one_point_is_its_lane(&crackle, &points, 0.3);
