@@ -82,11 +82,11 @@
 //! instantiation (`Simd<3, 2>` and the calls made on it, `SimdBorder<3>`, a
 //! `Texture`) is compiled in the crate that names it, with every metric and
 //! output set (they are chosen at run time) and every SIMD path. A release
-//! rebuild of one crate after a touch of its `main.rs` (2 cores, default
-//! features off): no kernel 0.1 s; `Simd<3, 2>::evaluate_slice` 7.2 s;
-//! `Simd<3, 1>::evaluate8` 3.5 s; `Simd<3, 4>::evaluate` 2.2 s;
-//! `SimdBorder<3>::border_slice` 3.6 s; a `Texture<3, 2>`'s `values`
-//! 7.8 s; all five 15.5 s. Name the kernels in a small crate of their own
+//! rebuild, after a touch of its `main.rs`, of a crate that uses five
+//! kernels (`Simd<3, 2>::evaluate_slice`, `Simd<3, 1>::evaluate8`,
+//! `Simd<3, 4>::evaluate`, `SimdBorder<3>::border_slice`, a five-octave
+//! `Texture<3, 2>`) took 8.8 s on 2 cores (docs/simd.md). Name the kernels
+//! in a small crate of their own
 //! in your workspace, behind plain functions (`pub fn crackle(points:
 //! &[[f64; 3]], out: &mut [f32])`): the crate that changes all day then
 //! rebuilds in 0.1 s, and the kernels only when they change.
