@@ -97,6 +97,7 @@
 //! differs.
 
 use crate::config::{Config, ConfigError};
+pub use crate::math::splitmix64;
 use crate::math::{euclidean_ball_volume, gamma};
 
 /// LCG multiplier A.
@@ -148,14 +149,6 @@ pub const fn fmix32(mut h: u32) -> u32 {
     h = h.wrapping_mul(0xC2B2_AE35);
     h ^= h >> 16;
     h
-}
-
-/// SplitMix64's output function applied to `seed + γ`.
-pub const fn splitmix64(seed: u64) -> u64 {
-    let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }
 
 /// The two 32-bit keys a seed is folded into.

@@ -39,6 +39,14 @@ pub fn gamma(x: f64) -> f64 {
     }
 }
 
+/// SplitMix64's output function applied to `seed + γ`.
+pub const fn splitmix64(seed: u64) -> u64 {
+    let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 /// A uniform f64 in [0, 1) from a seed and a counter (SplitMix64 twice): a
 /// counter-based generator, so point i of a seeded set needs no other point.
 /// The harness draws its samples with it, and
@@ -46,7 +54,6 @@ pub fn gamma(x: f64) -> f64 {
 /// sample points.
 #[inline]
 pub fn uniform(seed: u64, counter: u64) -> f64 {
-    use crate::definition::splitmix64;
     (splitmix64(seed ^ splitmix64(counter)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 

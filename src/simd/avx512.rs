@@ -26,10 +26,10 @@
 //! [`tiles`], after [`runtime_avx512`] has seen the CPU report the
 //! features. [`Avx512::broadcast_add_on_fma`] calls the one instruction of
 //! inline assembly in `lanes.rs` ([`broadcast_fma`]: the compiler does not
-//! emit that form). This module, the run-time AVX2 calls in `mod.rs` and
-//! `coherent.rs`, the grid tiles' prefetch of their outputs in
-//! `coherent.rs` (a cache hint, which reads nothing and cannot fault) and
-//! that instruction are the crate's only `unsafe` code.
+//! emit that form). This module, the run-time AVX2 calls in `entry.rs`,
+//! `coherent.rs` and `border/search.rs`, the grid tiles' prefetch of their
+//! outputs in `tiles.rs` (a cache hint, which reads nothing and cannot
+//! fault) and that instruction are the crate's only `unsafe` code.
 //!
 //! With the sixteen lanes here the default build ran 3D F1 on random
 //! points at 25.1-25.7 M samples/s against 22.7-23.3 for the AVX-512 build
@@ -47,11 +47,12 @@ use std::arch::x86_64::{
     _mm512_sub_ps, _mm512_xor_si512, _CMP_EQ_OQ, _CMP_LE_OQ, _CMP_LT_OQ,
 };
 
-use super::batch::Point;
-use super::coherent::{Band, GridSample};
 use super::lanes::Lanes;
 use super::lanes::{broadcast_fma, WIDEST};
-use super::{runtime_avx512, Euclid, Features32, Outputs, Simd, FIRST, REST};
+use super::region::Band;
+use super::sample::{GridSample, Point};
+use super::search::{FIRST, REST};
+use super::{runtime_avx512, Euclid, Features32, Outputs, Simd};
 use std::cell::Cell;
 
 /// Sixteen lanes in one AVX-512 register each, masks in a mask register.

@@ -4,17 +4,17 @@
 //! Euclidean metric, the CPU has AVX-512), so a point gives the same bits
 //! whichever way it arrives.
 
-use super::{Best, Features32, Located, Simd, Stages, FIRST, REST, UNIT};
+use super::best::Best;
+use super::generate::UNIT;
+use super::locate::Located;
+pub use super::sample::Point;
+use super::sample::{write_lanes, GridSample};
+use super::search::{Stages, FIRST, REST};
+use super::{Features32, Simd};
 use crate::definition::MAX_CELL_COORD;
 #[cfg(target_feature = "avx512f")]
 use crate::simd::lanes::Sixteen;
 use crate::simd::lanes::{Eight, Lanes, One, WIDEST};
-
-/// A sample position the kernel accepts, converted to f64 user units.
-pub trait Point<const D: usize>: Copy {
-    /// The coordinates in f64 (exact for every implementor here).
-    fn coordinates(&self) -> [f64; D];
-}
 
 /// Shades arbitrary points eight at a time, the shape of a renderer's loop
 /// over its hits: `f` gets each block of eight points (a last block of fewer
@@ -52,34 +52,6 @@ pub fn by_eights<const D: usize, P: Point<D>, T: Copy>(
     }
     Ok(())
 }
-
-impl<const D: usize> Point<D> for [f64; D] {
-    #[inline(always)]
-    fn coordinates(&self) -> [f64; D] {
-        *self
-    }
-}
-
-impl<const D: usize> Point<D> for [f32; D] {
-    #[inline(always)]
-    fn coordinates(&self) -> [f64; D] {
-        self.map(f64::from)
-    }
-}
-
-macro_rules! glam_point {
-    ($d:literal, $($t:ty),*) => {$(
-        impl Point<$d> for $t {
-            #[inline(always)]
-            fn coordinates(&self) -> [f64; $d] {
-                self.to_array().map(f64::from)
-            }
-        }
-    )*};
-}
-glam_point!(2, glam::Vec2, glam::DVec2);
-glam_point!(3, glam::Vec3, glam::Vec3A, glam::DVec3);
-glam_point!(4, glam::Vec4, glam::DVec4);
 
 /// A regular grid of samples: point `i` (per axis, `i[a] < size[a]`) is at
 /// `origin[a] + step[a] · i[a]`, computed in f64. Points are stored with axis
@@ -253,7 +225,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 *b = p.coordinates();
             }
             let (best, left, raw) = first(&self.locate::<L>(&block), Best::empty());
-            super::coherent::write_lanes::<L, D, N, true, true>(&best, &mut out[c * L::N..c * L::N + chunk.len()]);
+            write_lanes::<L, D, N, true, true>(&best, &mut out[c * L::N..c * L::N + chunk.len()]);
             let mut lanes = L::bits(left) & ((1 << chunk.len()) - 1);
             if lanes == 0 {
                 continue;
@@ -292,7 +264,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
         let mut results = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; WIDEST];
         let (best, _, _) = rest(&self.locate::<L>(&open.points), open.held.to_lanes::<L>());
-        super::coherent::write_lanes::<L, D, N, true, true>(&best, &mut results[..L::N]);
+        write_lanes::<L, D, N, true, true>(&best, &mut results[..L::N]);
         for (slot, r) in open.slots[..n].iter().zip(results) {
             out[*slot] = r;
         }
@@ -384,7 +356,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             return Err(SizeError { needed, given: out.len() });
         }
         if !self.grid_coherent(grid, out, false) {
-            super::coherent::GridSample::per_sample(self, grid, 0, out);
+            GridSample::per_sample(self, grid, 0, out);
         }
         Ok(())
     }
@@ -432,7 +404,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// Eight samples into up to eight results.
     #[inline]
     pub(super) fn write8(&self, block: &[[f64; D]; 8], dst: &mut [Features32<D, N>]) {
-        super::coherent::write_lanes::<Eight, D, N, true, true>(&self.dispatch8(&self.locate::<Eight>(block)), dst);
+        write_lanes::<Eight, D, N, true, true>(&self.dispatch8(&self.locate::<Eight>(block)), dst);
     }
 
     /// One sample given as a cell of the pattern (see

@@ -15,7 +15,9 @@
 //! crate (mean F1 = 1); multiply a user coordinate by
 //! [`Pattern::scale`](crate::Pattern::scale) to get cells.
 
-use super::{Features32, Features8, Located, Simd, UNIT};
+use super::generate::UNIT;
+use super::locate::Located;
+use super::{Features32, Features8, Simd};
 use crate::simd::lanes::{Eight, Lanes, One, WIDEST};
 
 /// The largest period per axis, in cells (2^24: a reduced coordinate keeps

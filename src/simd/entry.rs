@@ -1,0 +1,405 @@
+//! The per-sample kernel's entry points: building an evaluator, one point,
+//! eight, lanes per axis, and the dispatch from the configuration's metric
+//! and outputs to a monomorphised search ([`search`](super::search)).
+
+use wide::f32x8;
+
+use super::best::Best;
+use super::features::{Features32, Features8};
+use super::generate::{PointConstants, Splat, WideConstants, UNIT};
+use super::lanes::{Eight, Lanes, One, WIDEST};
+use super::locate::Located;
+use super::metric::{distance_of_rank, Chebyshev, Euclid, Manhattan, Metric32, Minkowski};
+use super::search::{logical_block, mark_invalid, Stages, WHOLE};
+use super::{runtime_avx512, Outputs, Simd};
+use crate::config::{Config, ConfigError, Metric};
+use crate::definition::{lcg_jump, Pattern};
+
+impl<const D: usize, const N: usize> Simd<D, N> {
+    /// Builds the evaluator of F1..FN. The order is the type's `N`, as for
+    /// every typed evaluator: `config.order` is set to `N` whatever it held
+    /// ([`Config::order`]).
+    ///
+    /// # Errors
+    /// The first invalid field of `config` ([`ConfigError::Order`] if `N`
+    /// is 0 or above [`crate::MAX_ORDER`]).
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let f2 = Simd::<3, 2>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert_eq!(f2.outputs(), Outputs::Distances);
+    /// // The order is the const generic.
+    /// assert_eq!(f2.config().order, 2);
+    /// ```
+    pub fn new(config: Config, outputs: Outputs) -> Result<Self, ConfigError> {
+        let config = Config { order: N, ..config };
+        let pattern = Pattern::<D>::new(&config)?;
+        let table = *pattern.table().entries();
+        let most = pattern.table().max_population();
+        let sorted = table.windows(2).all(|w| w[0] <= w[1]);
+        let points = (0..most)
+            .map(|j| {
+                let base = 1 + j * (D as u32 + 1);
+                // In a sorted table, point j exists where the state's top
+                // byte reaches the first entry above j.
+                let threshold = table.iter().position(|&n| u32::from(n) > j).map_or(f32::INFINITY, |b| b as f32 - 0.5);
+                let id = lcg_jump(base);
+                let coordinate: [(u32, u32); D] = std::array::from_fn(|a| lcg_jump(base + 1 + a as u32));
+                let splat = |(m, c): (u32, u32)| (Splat([m; WIDEST]), Splat([c; WIDEST]));
+                let key = if sorted { threshold } else { j as f32 };
+                PointConstants {
+                    id,
+                    coordinate,
+                    wide: WideConstants { key: Splat([key; WIDEST]), id: splat(id), coordinate: coordinate.map(splat) },
+                }
+            })
+            .collect();
+        let block = logical_block::<D>();
+        let near = block.iter().take_while(|o| o.iter().all(|&v| v <= 0)).count();
+        let inv_scale = (1.0 / pattern.scale()) as f32;
+        Ok(Simd { config, pattern, outputs, table, sorted, points, block, near, inv_scale })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The point set.
+    pub fn pattern(&self) -> &Pattern<D> {
+        &self.pattern
+    }
+
+    /// The outputs computed.
+    pub fn outputs(&self) -> Outputs {
+        self.outputs
+    }
+
+    /// One sample (the 1-lane instantiation of the kernel).
+    ///
+    /// A point costs about what a packet of eight costs: 3D F1 ran 4.4 M
+    /// points/s one at a time against 11.0 per point through
+    /// [`Simd::evaluate_slice`] with AVX2 and 27.3 where slices run sixteen
+    /// AVX-512 lanes (f64 [`crate::Reference`]: 2.4; `cargo bench --bench
+    /// single`, default build). Shade many points through the slice call or
+    /// [`crate::by_eights`].
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    /// let f = basis.evaluate([0.3, -1.7]);
+    /// assert!(f.distance[0] <= f.distance[1]);
+    /// // The delta's length is F1.
+    /// let [dx, dy] = f.delta[0];
+    /// assert!(((dx * dx + dy * dy).sqrt() - f.distance[0]).abs() < 1e-6);
+    /// // Bad input: NaN distances and the invalid ID.
+    /// assert!(basis.evaluate([f64::NAN, 0.0]).distance[0].is_nan());
+    /// ```
+    pub fn evaluate(&self, x: [f64; D]) -> Features32<D, N> {
+        let located = self.locate::<One>(&[x]);
+        let best = self.dispatch::<One>(&located);
+        Features32 { distance: best.rank, delta: best.delta, id: best.id }
+    }
+
+    /// One sample given in f32.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert_eq!(basis.evaluate_f32([1.5, 2.0, 0.25]).distance, basis.evaluate([1.5, 2.0, 0.25]).distance);
+    /// ```
+    pub fn evaluate_f32(&self, x: [f32; D]) -> Features32<D, N> {
+        self.evaluate(x.map(f64::from))
+    }
+
+    /// Eight samples, one per lane (the 8-lane instantiation).
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Ids).unwrap();
+    /// let points: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64, 0.5, -2.0]);
+    /// let f = basis.evaluate8(&points);
+    /// // Lane i is bit for bit the single-point result.
+    /// assert_eq!(f.distance[0].to_array()[3].to_bits(), basis.evaluate(points[3]).distance[0].to_bits());
+    /// ```
+    pub fn evaluate8(&self, x: &[[f64; D]; 8]) -> Features8<D, N> {
+        let located = self.locate::<Eight>(x);
+        let best = self.dispatch8(&located);
+        Features8 { distance: best.rank, delta: best.delta, id: best.id }
+    }
+
+    /// The 8-lane kernel, recompiled for AVX2 when this build lacks it and
+    /// the CPU has it (see [`runtime_avx2`](super::runtime_avx2)): the same operations, so the
+    /// same bits, in fewer instructions.
+    #[inline(always)]
+    pub(super) fn dispatch8(&self, at: &Located<Eight, D>) -> Best<Eight, D, N> {
+        self.dispatch8_stage::<WHOLE>(at, Best::empty()).0
+    }
+
+    /// [`Simd::dispatch8`], or one stage of the search (see [`Stages`]).
+    #[inline(always)]
+    pub(super) fn dispatch8_stage<const STAGE: u8>(
+        &self,
+        at: &Located<Eight, D>,
+        start: Best<Eight, D, N>,
+    ) -> Stages<Eight, D, N> {
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if super::runtime_avx2() {
+            // SAFETY: `dispatch_avx2` requires AVX2 and nothing else, and
+            // `runtime_avx2` has just seen the CPU report it.
+            #[allow(unsafe_code)]
+            return unsafe { self.dispatch_avx2::<STAGE>(at, start) };
+        }
+        self.dispatch_stage::<Eight, STAGE>(at, start)
+    }
+
+    /// [`Simd::dispatch`] in eight lanes, compiled with AVX2 enabled: `wide`
+    /// keeps the SSE2 code it was built with, but LLVM lowers the Euclidean
+    /// kernels inlined here again, turning the scalar fallbacks inside them
+    /// (the 32-bit lane multiply above all) into AVX2 instructions. The
+    /// other metrics go through the out-of-line `search_outputs`.
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+    #[target_feature(enable = "avx2")]
+    pub(super) fn dispatch_avx2<const STAGE: u8>(
+        &self,
+        at: &Located<Eight, D>,
+        start: Best<Eight, D, N>,
+    ) -> Stages<Eight, D, N> {
+        self.dispatch_stage::<Eight, STAGE>(at, start)
+    }
+
+    /// Lanes per block in [`Simd::evaluate_slice`] for this kernel on this
+    /// CPU: sixteen where AVX-512 is compiled in, or, for the Euclidean
+    /// metric, where the CPU has it ([`runtime_avx512`]); eight otherwise.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.slice_lanes() == 8 || basis.slice_lanes() == 16);
+    /// ```
+    pub fn slice_lanes(&self) -> usize {
+        let runtime = self.config.metric == Metric::Euclidean && runtime_avx512();
+        if cfg!(target_feature = "avx512f") || runtime {
+            16
+        } else {
+            8
+        }
+    }
+
+    /// Eight samples as lanes per axis.
+    ///
+    /// ```
+    /// use wide::f32x8;
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let x = f32x8::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    /// let f = basis.evaluate_lanes([x, f32x8::splat(0.5)]);
+    /// assert_eq!(f.distance[0].to_array()[2], basis.evaluate_f32([2.0, 0.5]).distance[0]);
+    /// ```
+    pub fn evaluate_lanes(&self, x: [f32x8; D]) -> Features8<D, N> {
+        let arrays = x.map(|v| v.to_array());
+        let points: [[f64; D]; 8] = std::array::from_fn(|i| std::array::from_fn(|a| arrays[a][i] as f64));
+        self.evaluate8(&points)
+    }
+}
+
+impl<const D: usize, const N: usize> Simd<D, N> {
+    /// Picks the monomorphised kernel for the metric and outputs, then
+    /// converts ranks to distances and marks bad lanes.
+    #[inline(always)]
+    pub(super) fn dispatch<L: Lanes>(&self, at: &Located<L, D>) -> Best<L, D, N> {
+        self.dispatch_stage::<L, WHOLE>(at, Best::empty()).0
+    }
+
+    /// [`Simd::dispatch`], or one stage of the search (see [`Stages`]),
+    /// from the candidates in `start`.
+    #[inline(always)]
+    pub(super) fn dispatch_stage<L: Lanes, const STAGE: u8>(
+        &self,
+        at: &Located<L, D>,
+        start: Best<L, D, N>,
+    ) -> Stages<L, D, N> {
+        let (raw, open) = match (self.config.metric, self.outputs) {
+            (Metric::Euclidean, Outputs::Distances) => self.search::<L, Euclid, false, false, STAGE>(Euclid, at, start),
+            (Metric::Euclidean, Outputs::Ids) => self.search::<L, Euclid, true, false, STAGE>(Euclid, at, start),
+            (Metric::Euclidean, Outputs::IdsAndDeltas) => {
+                self.search::<L, Euclid, true, true, STAGE>(Euclid, at, start)
+            }
+            (Metric::Manhattan, o) => self.search_outputs::<L, Manhattan, STAGE>(Manhattan, o, at, start),
+            (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev, STAGE>(Chebyshev, o, at, start),
+            (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski, STAGE>(Minkowski(p), o, at, start),
+        };
+        let mut best = raw;
+        self.finish::<L, true>(&mut best);
+        if at.valid[..L::N].iter().any(|v| !v) {
+            mark_invalid(&mut best, &at.valid);
+        }
+        (best, open, raw)
+    }
+
+    /// Ranks in lane units to distances in user units, and deltas to user
+    /// units (unless `DELTAS` is false: then they are zero and stay so): the
+    /// last step of every path.
+    #[inline(always)]
+    pub(super) fn finish<L: Lanes, const DELTAS: bool>(&self, best: &mut Best<L, D, N>) {
+        let (unit, inv) = (L::f(1.0 / UNIT), L::f(self.inv_scale));
+        let metric = self.config.metric;
+        for k in 0..N {
+            best.rank[k] = L::mul(L::mul(distance_of_rank::<L>(metric, best.rank[k]), unit), inv);
+            for a in (0..D).filter(|_| DELTAS) {
+                best.delta[k][a] = L::mul(L::mul(best.delta[k][a], unit), inv);
+            }
+        }
+    }
+
+    /// The kernels of the other metrics, kept out of line: a default
+    /// build's AVX2 copy then holds only the Euclidean kernels (see
+    /// [`Simd::dispatch_avx2`]), and the other metrics run the build's own
+    /// instructions.
+    ///
+    /// One instantiation per metric serves every output set: the search
+    /// with IDs and deltas, then the outputs not asked for put back to what
+    /// the search without them leaves (`start`'s, never written). The
+    /// distances are the same bits: the list holds the same N smallest
+    /// ranks whether ties are ordered by ID or not. Each instantiation of
+    /// the search is a sizeable part of a user's build, and these metrics
+    /// are the rarer ones: a third of the copies, paid for by tracking IDs
+    /// and deltas where only distances are asked (not measured).
+    #[inline(never)]
+    pub(super) fn search_outputs<L: Lanes, M: Metric32, const STAGE: u8>(
+        &self,
+        m: M,
+        o: Outputs,
+        at: &Located<L, D>,
+        start: Best<L, D, N>,
+    ) -> (Best<L, D, N>, L::M) {
+        let (id, delta) = (start.id, start.delta);
+        let (mut best, open) = self.search::<L, M, true, true, STAGE>(m, at, start);
+        if o != Outputs::IdsAndDeltas {
+            best.delta = delta;
+        }
+        if o == Outputs::Distances {
+            best.id = id;
+        }
+        (best, open)
+    }
+}
+
+impl<const N: usize> Simd<2, N> {
+    /// One point given as a `glam::Vec2`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<2, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.evaluate_vec2(glam::Vec2::new(0.5, 0.25)).distance[0] >= 0.0);
+    /// ```
+    pub fn evaluate_vec2(&self, p: glam::Vec2) -> Features32<2, N> {
+        self.evaluate_f32(p.to_array())
+    }
+}
+
+impl<const N: usize> Simd<3, N> {
+    /// One point given as a `glam::Vec3`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let p = glam::Vec3::new(0.5, 0.25, 4.0);
+    /// assert_eq!(basis.evaluate_vec3(p).distance, basis.evaluate_vec3a(p.into()).distance);
+    /// ```
+    pub fn evaluate_vec3(&self, p: glam::Vec3) -> Features32<3, N> {
+        self.evaluate_f32(p.to_array())
+    }
+
+    /// One point given as a `glam::Vec3A`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.evaluate_vec3a(glam::Vec3A::new(1.0, 2.0, 3.0)).distance[0] >= 0.0);
+    /// ```
+    pub fn evaluate_vec3a(&self, p: glam::Vec3A) -> Features32<3, N> {
+        self.evaluate_f32(p.to_array())
+    }
+
+    /// Eight points given as `glam::Vec3`s.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// let points: [glam::Vec3; 8] = std::array::from_fn(|i| glam::Vec3::new(i as f32 * 0.25, 1.0, 2.0));
+    /// let f = basis.evaluate8_vec3(&points);
+    /// assert_eq!(f.distance[0].to_array()[5], basis.evaluate_vec3(points[5]).distance[0]);
+    /// ```
+    pub fn evaluate8_vec3(&self, p: &[glam::Vec3; 8]) -> Features8<3, N> {
+        self.evaluate8(&p.map(|v| v.to_array().map(f64::from)))
+    }
+}
+
+impl<const N: usize> Simd<4, N> {
+    /// One point given as a `glam::Vec4`.
+    ///
+    /// ```
+    /// use worley::{Config, Outputs, Simd};
+    /// let basis = Simd::<4, 1>::new(Config::default(), Outputs::Distances).unwrap();
+    /// assert!(basis.evaluate_vec4(glam::Vec4::new(0.5, 0.25, 4.0, -1.0)).distance[0] >= 0.0);
+    /// ```
+    pub fn evaluate_vec4(&self, p: glam::Vec4) -> Features32<4, N> {
+        self.evaluate_f32(p.to_array())
+    }
+}
+
+/// The AVX2 recompilation of a default build against the code that build
+/// would run without it. Every other test of the 8-lane kernel in such a
+/// build goes through whichever of the two the CPU selects; this one keeps
+/// the other bit for bit equal to it.
+#[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
+mod runtime_avx2_tests {
+    use super::*;
+    use crate::config::Mode;
+    use crate::simd::locate::Cells;
+    use crate::simd::test_batch;
+
+    fn same<const D: usize, const N: usize>(config: Config) {
+        if !super::super::runtime_avx2() {
+            eprintln!("this CPU has no AVX2: only the SSE2 kernel exists to test");
+            return;
+        }
+        for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
+            let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+            let mut lanewise = 0;
+            for batch in 0..1500 {
+                let points = test_batch::<D>(11, batch);
+                let located = kernel.locate::<Eight>(&points);
+                lanewise += usize::from(matches!(located.cells, Cells::Full(_)));
+                let plain = kernel.dispatch::<Eight>(&located);
+                // SAFETY: `runtime_avx2` returned true above.
+                #[allow(unsafe_code)]
+                let avx2 = unsafe { kernel.dispatch_avx2::<WHOLE>(&located, Best::empty()).0 };
+                for k in 0..N {
+                    let what = format!("{outputs:?} F{} at batch {batch}", k + 1);
+                    let bits = |v: f32x8| v.to_array().map(f32::to_bits);
+                    assert_eq!(bits(plain.rank[k]), bits(avx2.rank[k]), "{what}: distances");
+                    assert_eq!(plain.id[k].to_array(), avx2.id[k].to_array(), "{what}: ids");
+                    for a in 0..D {
+                        assert_eq!(bits(plain.delta[k][a]), bits(avx2.delta[k][a]), "{what}: deltas");
+                    }
+                }
+            }
+            assert!(lanewise >= 700, "only {lanewise} of 1500 batches took the lane-wise locate");
+        }
+    }
+
+    #[test]
+    fn the_avx2_recompilation_gives_the_sse2_bits() {
+        // Euclidean only: the other metrics run the same out-of-line code
+        // (`search_outputs`) in both copies.
+        same::<2, 3>(Config { order: 3, ..Config::default() });
+        same::<3, 1>(Config::default());
+        same::<3, 4>(Config { order: 4, ..Config::default() });
+        same::<4, 2>(Config { order: 2, ..Config::default() });
+        same::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
+        same::<3, 2>(Config { order: 2, mode: Mode::Window, ..Config::default() });
+        same::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
+    }
+}

@@ -1,0 +1,210 @@
+//! A texture over many points: slices in any order, filtered slices, and
+//! grids, whose octaves share each band's located rows.
+
+use wide::f32x8;
+
+use super::Texture;
+use crate::simd::{GridRows, Point};
+
+impl<const D: usize, const N: usize> Texture<D, N> {
+    /// Values of many points into a caller's buffer ([`Texture::value8`]
+    /// eight at a time).
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out` is shorter than `xs`; nothing is written.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<3, 2>::new(worley::Config::default(), Combination::crackle(), Fractal::default(), None).unwrap();
+    /// let points: Vec<[f32; 3]> = (0..50).map(|i| [i as f32 * 0.2, 0.0, 0.0]).collect();
+    /// let mut out = vec![0.0; 50];
+    /// t.values(&points, &mut out).unwrap();
+    /// assert_eq!(out[17], t.value([17.0f32 * 0.2, 0.0, 0.0].map(f64::from)));
+    /// ```
+    pub fn values<P: Point<D>>(&self, xs: &[P], out: &mut [f32]) -> Result<(), crate::SizeError> {
+        self.filtered_values(xs, None, out)
+    }
+
+    /// Values of many points, point i standing for a footprint of side
+    /// `widths[i]` ([`Texture::filtered8`] eight at a time); `None` is the
+    /// point samples of [`Texture::values`].
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out` or `widths` is shorter than `xs`;
+    /// nothing is written.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::octaves(3), None).unwrap();
+    /// let points: Vec<[f64; 2]> = (0..20).map(|i| [i as f64 * 0.3, 1.0]).collect();
+    /// let widths: Vec<f32> = (0..20).map(|i| i as f32 * 0.05).collect();
+    /// let mut out = vec![0.0; 20];
+    /// t.filtered_values(&points, Some(&widths), &mut out).unwrap();
+    /// assert_eq!(out[9], t.filtered(points[9], widths[9]));
+    /// ```
+    pub fn filtered_values<P: Point<D>>(
+        &self,
+        xs: &[P],
+        widths: Option<&[f32]>,
+        out: &mut [f32],
+    ) -> Result<(), crate::SizeError> {
+        if out.len() < xs.len() {
+            return Err(crate::SizeError { needed: xs.len(), given: out.len() });
+        }
+        if let Some(w) = widths.filter(|w| w.len() < xs.len()) {
+            return Err(crate::SizeError { needed: xs.len(), given: w.len() });
+        }
+        for (c, (chunk, dst)) in xs.chunks(8).zip(out.chunks_mut(8)).enumerate() {
+            let mut block = [[0.0; D]; 8];
+            let mut width = [0.0; 8];
+            for (i, p) in chunk.iter().enumerate() {
+                block[i] = p.coordinates();
+                width[i] = widths.map_or(0.0, |w| w[c * 8 + i]);
+            }
+            let v = self.filtered8(&block, width).to_array();
+            dst.copy_from_slice(&v[..dst.len()]);
+        }
+        Ok(())
+    }
+
+    /// Values of every point of a grid (axis 0 fastest), on all cores when
+    /// the `parallel` feature is on; identical to the serial result and to
+    /// [`Texture::value`] at each [`Grid::point`](crate::Grid::point).
+    ///
+    /// Without a period, and when every octave's frequency is a power of two
+    /// (the default lacunarity 2), octave i of the grid is itself a grid,
+    /// with origin and step scaled by its frequency, whose points are the
+    /// octave's coordinates bit for bit (scaling by a power of two is exact
+    /// and commutes with rounding): each octave then takes the coherent grid
+    /// path of [`Simd::evaluate_grid_distances`](crate::Simd::evaluate_grid_distances), a band of rows at a time
+    /// for all octaves, and the combination and the sum run in the order
+    /// [`Texture::value8`] runs them. Other textures take eight points at a
+    /// time through [`Texture::value8`].
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out.len() != grid.len()`.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Grid;
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::octaves(2), None).unwrap();
+    /// let grid = Grid { origin: [0.0, 0.0], step: [0.1, 0.1], size: [32, 16] };
+    /// let mut image = vec![0.0; 32 * 16];
+    /// t.values_grid(&grid, &mut image).unwrap();
+    /// assert_eq!(image[32 + 3], t.value(grid.point(32 + 3)));
+    /// ```
+    pub fn values_grid(&self, grid: &crate::Grid<D>, out: &mut [f32]) -> Result<(), crate::SizeError> {
+        self.filtered_grid(grid, 0.0, out)
+    }
+
+    /// Values of every point of a grid, each standing for a footprint of
+    /// side `width` (a grid's samples usually stand for their step): the
+    /// same bits as [`Texture::filtered8`] at each point, through the grid
+    /// tiles octave by octave where [`Texture::values_grid`] takes them
+    /// (octaves the footprint does not resolve are not evaluated), eight
+    /// points at a time otherwise.
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out.len() != grid.len()`.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Grid;
+    /// let t = Texture::<2, 1>::new(worley::Config::default(), Combination::f(1), Fractal::octaves(6), None).unwrap();
+    /// let grid = Grid { origin: [0.0, 0.0], step: [0.5, 0.5], size: [16, 16] };
+    /// let mut image = vec![0.0; 16 * 16];
+    /// t.filtered_grid(&grid, 0.5, &mut image).unwrap();
+    /// assert_eq!(image[16 + 3], t.filtered(grid.point(16 + 3), 0.5));
+    /// ```
+    pub fn filtered_grid(&self, grid: &crate::Grid<D>, width: f32, out: &mut [f32]) -> Result<(), crate::SizeError> {
+        let alpha: Vec<f32> = self.octaves.iter().map(|&(f, _, _)| self.weights(&[width; 8], f)[0]).collect();
+        let Some(octaves) = self.octave_grids(grid, &alpha) else {
+            return grid.fill_by_eights(out, |block| self.filtered8(block, [width; 8]).to_array());
+        };
+        let needed = grid.len().ok_or(crate::SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(crate::SizeError { needed, given: out.len() });
+        }
+        let width = grid.size[0];
+        if needed == 0 {
+            return Ok(());
+        }
+        let mean = if alpha.iter().all(|&a| a == 1.0) { f32::NAN } else { self.blend_curve().mean() };
+        // Only the octaves the footprint resolves are evaluated.
+        let rows: Vec<Option<GridRows<'_, D>>> =
+            octaves.iter().zip(&alpha).map(|(g, &a)| (a != 0.0).then(|| self.values.grid_rows(g))).collect();
+        // Rows `first..` of every octave, combined and summed into `dst`,
+        // in the order and with the operations of `filtered8`.
+        let band = |first: usize, dst: &mut [f32]| {
+            let mut distances = vec![[0f32; N]; dst.len()];
+            for (i, (octave, &(_, amplitude, _))) in rows.iter().zip(&self.octaves).enumerate() {
+                let a = alpha[i];
+                let Some(octave) = octave else {
+                    for s in dst.iter_mut() {
+                        *s = if i == 0 { mean } else { *s + amplitude * mean };
+                    }
+                    continue;
+                };
+                self.values.grid_rows_distances(octave, first, &mut distances);
+                for (sum, d) in dst.chunks_mut(8).zip(distances.chunks(8)) {
+                    let f: [f32x8; N] =
+                        std::array::from_fn(|k| f32x8::from(std::array::from_fn(|j| d[j.min(d.len() - 1)][k])));
+                    let v = self.combination.value(&f).to_array();
+                    for (s, v) in sum.iter_mut().zip(v) {
+                        let v = if a == 1.0 { v } else { a * v + (1.0 - a) * mean };
+                        *s = if i == 0 { v } else { *s + amplitude * v };
+                    }
+                }
+            }
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            let rows = crate::simd::BAND;
+            out.par_chunks_mut(rows * width).enumerate().for_each(|(b, dst)| band(b * rows, dst));
+        }
+        #[cfg(not(feature = "parallel"))]
+        {
+            let rows = crate::simd::SERIAL_BAND;
+            out.chunks_mut(rows * width).enumerate().for_each(|(b, dst)| band(b * rows, dst));
+        }
+        Ok(())
+    }
+
+    /// Octave i of `grid` as a grid of its own (origin and step times the
+    /// octave's frequency), where that gives the octave's coordinates bit
+    /// for bit: no period, every frequency a power of two, and nothing
+    /// scaled near overflow, no NaN or infinite origin or step.
+    ///
+    /// An octave the footprint does not resolve (weight 0) is its mean
+    /// without evaluation, which is its value only where the kernel can
+    /// locate every point: such an octave also needs the grid's extent
+    /// within the kernel's range (else eight points at a time, which give
+    /// NaN where the kernel would). A NaN weight takes eight points at a
+    /// time too.
+    pub(super) fn octave_grids(&self, grid: &crate::Grid<D>, alpha: &[f32]) -> Option<Vec<crate::Grid<D>>> {
+        let power_of_two = |f: f64| f.is_normal() && f > 0.0 && f.to_bits() & ((1u64 << 52) - 1) == 0;
+        // The largest magnitude any point's coordinate or partial sum takes.
+        let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
+        let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
+        let suits = finite
+            && self.border.is_none()
+            && self.period.is_none()
+            && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300)
+            && alpha.iter().zip(&self.octaves).all(|(&a, &(f, _, _))| {
+                (0.0..=1.0).contains(&a)
+                    && (a != 0.0
+                        || extent * f * self.values.pattern().scale() < crate::definition::MAX_CELL_COORD / 2.0)
+            });
+        suits.then(|| {
+            self.octaves
+                .iter()
+                .map(|&(f, _, _)| crate::Grid {
+                    origin: grid.origin.map(|o| o * f),
+                    step: grid.step.map(|s| s * f),
+                    size: grid.size,
+                })
+                .collect()
+        })
+    }
+}
