@@ -77,7 +77,8 @@
 //!   paths that meet points in different orders agree on IDs and deltas.
 //!
 //! ## The parts
-//! Each file imports only from the ones listed before it:
+//! Each file imports only from the ones listed before it (and the
+//! evaluator type [`Simd`], declared here):
 //!
 //! | file | what it holds |
 //! |---|---|
@@ -88,8 +89,8 @@
 //! | `search.rs` | the per-sample search and its certified widening |
 //! | `entry.rs` | building an evaluator, one point, eight, and the dispatch to a monomorphised search |
 //! | `sample.rs`, `region.rs` | what batches read and write per sample; a box of cells generated once and a band of grid rows |
-//! | `tiles.rs`, `tile.rs`, `coherent.rs` | the coherent path: rows of tiles, one tile's bound and certificate, the grid calls |
 //! | `avx512.rs` | the run-time sixteen-lane copies of slices and tiles |
+//! | `tiles.rs`, `tile.rs`, `coherent.rs` | the coherent path: rows of tiles, one tile's bound and certificate, the grid calls |
 //! | `batch.rs`, `periodic.rs` | slices, grids and points given as a cell plus a fraction; the tileable variant |
 //! | `border.rs`, `border/search.rs` | the distance to the cell's border and its search |
 //!

@@ -8,7 +8,8 @@ use super::lanes::Eight;
 #[cfg(target_feature = "avx512f")]
 use super::lanes::Sixteen;
 use super::lanes::{Lanes, WIDEST};
-use super::{Grid, Simd};
+use super::sample::Grid;
+use super::Simd;
 use crate::definition::{axis_term, axis_word, feature_id, hash_words};
 
 /// The feature points of a box of cells, generated once, as
