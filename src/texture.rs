@@ -155,6 +155,32 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         })
     }
 
+    /// The same texture with another fractal sum: the same configuration,
+    /// combination and period, and the blend curve if this texture has
+    /// measured it already ([`Texture::blend_curve`]), since the curve
+    /// depends on the first octave alone. What a tool that changes the
+    /// octaves, lacunarity or gain of a filtered texture calls, so that it
+    /// measures the curve once (some 10^5 evaluations); the values are
+    /// those of [`Texture::new`] with `fractal`, bit for bit.
+    ///
+    /// # Errors
+    /// As [`Texture::new`] for `fractal`.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Config;
+    /// let base = Texture::<2, 1>::new(Config::default(), Combination::f(1), Fractal::octaves(2), None).unwrap();
+    /// base.blend_curve();
+    /// let more = base.with_fractal(Fractal::octaves(5)).unwrap();
+    /// let fresh = Texture::<2, 1>::new(Config::default(), Combination::f(1), Fractal::octaves(5), None).unwrap();
+    /// assert_eq!(more.filtered([0.3, 2.5], 0.2).to_bits(), fresh.filtered([0.3, 2.5], 0.2).to_bits());
+    /// ```
+    pub fn with_fractal(&self, fractal: Fractal) -> Result<Self, TextureError> {
+        let mut t = Texture::new(*self.values.config(), self.combination.clone(), fractal, self.period)?;
+        t.curve = self.curve.clone();
+        Ok(t)
+    }
+
     /// The combination.
     pub fn combination(&self) -> &Combination {
         &self.combination

@@ -5,10 +5,16 @@
 //! break a documented promise. Short inputs are padded with zeros, so every
 //! byte string is a valid input.
 //!
-//! The four entry points are `#[inline]`: the crate that calls one (a fuzz
+//! The six entry points are `#[inline]`: the crate that calls one (a fuzz
 //! target, the regression test) compiles it and the kernels it instantiates,
 //! so that building the harness alone, as every test build of the kernel
 //! crate does, does not compile a dozen kernels that nothing there calls.
+
+mod border;
+mod filtered;
+
+pub use border::border;
+pub use filtered::filtered;
 
 use worley::config::{Config, Metric, Mode, MAX_ORDER};
 use worley::definition::{INVALID_ID, MAX_CELL_COORD};

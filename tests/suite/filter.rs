@@ -283,3 +283,39 @@ fn cell_shares_approach_the_footprint_s_own_shares() {
     assert!(worley::filter::cell_cover8(&f, [-1.0; 8])[0][0].is_nan());
     assert_eq!(worley::filter::cell_cover8(&f, [0.0; 8])[0][0], 1.0);
 }
+
+#[test]
+fn a_texture_with_another_fractal_keeps_its_curve_and_gives_a_fresh_texture_s_bits() {
+    let period = Some(Period::new([6, 4]).unwrap());
+    for (combination, period) in
+        [(Combination::crackle(), None), (Combination::Border, None), (Combination::f(1), period)]
+    {
+        let config = Config { seed: 9, ..Config::default() };
+        // Built as order 2 so that F2 − F1 fits; the border and F1 use F1.
+        let base = Texture::<2, 2>::new(config, combination.clone(), Fractal::octaves(1), period).unwrap();
+        let measured = base.blend_curve().clone();
+        for fractal in [Fractal::octaves(4), Fractal { octaves: 3, lacunarity: 3.0, gain: 0.7 }] {
+            let derived = base.with_fractal(fractal).unwrap();
+            let fresh = Texture::<2, 2>::new(config, combination.clone(), fractal, period).unwrap();
+            assert_eq!(derived.fractal(), fractal);
+            assert_eq!(derived.blend_curve(), &measured, "{combination:?}: the curve was measured again or changed");
+            assert_eq!(
+                fresh.blend_curve(),
+                &measured,
+                "{combination:?}: the curve depends on more than the first octave"
+            );
+            for i in 0..200 {
+                let x = [uniform(3, 2 * i) * 40.0 - 20.0, uniform(3, 2 * i + 1) * 40.0 - 20.0];
+                let w = [0.0, 0.01, 0.3, 2.0, 50.0][i as usize % 5];
+                assert_eq!(
+                    derived.filtered(x, w).to_bits(),
+                    fresh.filtered(x, w).to_bits(),
+                    "{combination:?} at {x:?}, width {w}"
+                );
+            }
+        }
+    }
+    // An invalid fractal sum is refused as `new` refuses it.
+    let t = Texture::<2, 1>::new(Config::default(), Combination::f(1), Fractal::default(), None).unwrap();
+    assert!(t.with_fractal(Fractal { gain: 1.5, ..Fractal::default() }).is_err());
+}

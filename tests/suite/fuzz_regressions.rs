@@ -8,11 +8,13 @@ use worley_harness::fuzz;
 
 type Check = fn(&[u8]);
 
-const TARGETS: [(&str, Check); 4] = [
+const TARGETS: [(&str, Check); 6] = [
     ("differential", fuzz::differential),
     ("continuity", fuzz::continuity),
     ("bad_input", fuzz::bad_input),
     ("config", fuzz::config),
+    ("border", fuzz::border),
+    ("filtered", fuzz::filtered),
 ];
 
 #[test]
