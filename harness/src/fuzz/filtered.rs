@@ -16,8 +16,9 @@ use super::Bytes;
 /// (zero, or 2^−8 to 2^8 cells). Both values must be numbers, differ by at
 /// most the texture's Lipschitz bound times the pair's distance plus
 /// rounding, and change by no more than rounding + 10^−3·(|v| + 1) when the
-/// width grows by a relative 10^−6 (the harness's discontinuity detector,
-/// `filtered_continuity`, on one decoded pair). Eight lanes must give the
+/// width grows by a relative 10^−6 (the two tests of the harness's
+/// discontinuity detector, `filtered_continuity`, written out here for one
+/// decoded pair). Eight lanes must give the
 /// one-point calls' bits, a zero width the point sample's, an infinite one
 /// a number, and a NaN or negative width or a NaN coordinate NaN in its own
 /// lane only; the slice call the 8-lane bits.
