@@ -164,6 +164,8 @@ pub mod config;
 pub mod definition;
 pub mod filter;
 pub mod math;
+#[cfg(feature = "parallel")]
+mod parallel;
 pub mod perlin;
 pub mod reference;
 pub mod simd;

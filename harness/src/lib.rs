@@ -180,9 +180,44 @@ pub fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D]
     std::array::from_fn(|a| (2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * range)
 }
 
+/// How much of a long test campaign runs. `cargo test` runs each long
+/// campaign in part ([`Tier::Quick`]), so that the suite answers in about a
+/// minute; `cargo test -- --ignored` runs the same campaigns whole
+/// ([`Tier::Full`], the tests named `campaign_…`). CI runs both.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tier {
+    /// A tenth of each campaign (at least one case).
+    Quick,
+    /// The whole campaign.
+    Full,
+}
+
+impl Tier {
+    /// The number of cases this tier runs of a campaign of `full` cases.
+    ///
+    /// ```
+    /// use worley_harness::Tier;
+    /// assert_eq!(Tier::Full.of(1_000_000), 1_000_000);
+    /// assert_eq!(Tier::Quick.of(1_000_000), 100_000);
+    /// assert_eq!(Tier::Quick.of(3), 1);
+    /// ```
+    pub fn of(self, full: usize) -> usize {
+        match self {
+            Tier::Quick => full.div_ceil(10),
+            Tier::Full => full,
+        }
+    }
+}
+
 /// Runs `f` over `0..n` in chunks, on all cores with the `parallel`
 /// feature, and returns the chunks' results in order.
 pub fn chunked<A: Send>(n: usize, f: impl Fn(std::ops::Range<usize>) -> A + Sync + Send) -> Vec<A> {
+    chunked_dyn(n, &f)
+}
+
+/// [`chunked`] with its work as a `dyn` closure: rayon's generic machinery
+/// is compiled once per result type, not once per caller and kernel.
+fn chunked_dyn<A: Send>(n: usize, f: &(dyn Fn(std::ops::Range<usize>) -> A + Sync)) -> Vec<A> {
     const CHUNK: usize = 4096;
     let chunks = n.div_ceil(CHUNK);
     let range = move |c: usize| c * CHUNK..((c + 1) * CHUNK).min(n);

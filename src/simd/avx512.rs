@@ -258,8 +258,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         self.slice_in_stages::<Avx512, P>(
             xs,
             out,
-            |at, start| self.dispatch_stage::<Avx512, FIRST>(at, start),
-            |at, start| self.dispatch_stage::<Avx512, REST>(at, start),
+            |at, start| self.dispatch_euclid_stage::<Avx512, FIRST>(at, start),
+            |at, start| self.dispatch_euclid_stage::<Avx512, REST>(at, start),
         );
     }
 

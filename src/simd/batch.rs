@@ -189,14 +189,14 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         xs: &[P],
         out: &mut [Features32<D, N>],
     ) -> Result<(), SizeError> {
-        use rayon::prelude::*;
         if out.len() < xs.len() {
             return Err(SizeError { needed: xs.len(), given: out.len() });
         }
-        out[..xs.len()]
-            .par_chunks_mut(TILE)
-            .zip(xs.par_chunks(TILE))
-            .try_for_each(|(dst, src)| self.evaluate_slice(src, dst))
+        crate::parallel::for_each_chunk(&mut out[..xs.len()], TILE, &|t, dst| {
+            // Of the same length as `dst`, so this cannot fail.
+            let _ = self.evaluate_slice(&xs[t * TILE..t * TILE + dst.len()], dst);
+        });
+        Ok(())
     }
 
     /// Every point of a regular grid, into a caller's buffer of exactly
@@ -276,13 +276,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// ```
     #[cfg(feature = "parallel")]
     pub fn evaluate_grid_parallel(&self, grid: &Grid<D>, out: &mut [Features32<D, N>]) -> Result<(), SizeError> {
-        use rayon::prelude::*;
         let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
         if !self.grid_coherent(grid, out, true) {
-            out.par_chunks_mut(TILE).enumerate().for_each(|(t, dst)| self.grid_range(grid, t * TILE, dst));
+            crate::parallel::for_each_chunk(out, TILE, &|t, dst| self.grid_range(grid, t * TILE, dst));
         }
         Ok(())
     }
@@ -328,7 +327,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// ```
     pub fn evaluate_in_cell(&self, cell: [i64; D], fraction: [f32; D]) -> Features32<D, N> {
         let located = in_cell::<One, D>(&[cell], &[fraction]);
-        let best = self.dispatch::<One>(&located);
+        let best = self.dispatch_one(&located).0;
         Features32 { distance: best.rank, delta: best.delta, id: best.id }
     }
 

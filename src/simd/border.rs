@@ -47,7 +47,7 @@
 //! and u one rounding of its length, so b is within
 //! 4ε_f32·(2·F1 + 2·b + 1/S) of the f64 reference (S the pattern's scale),
 //! and the normal within a few ε_f32; the neighbour is the reference's
-//! except where two planes lie that close. `tests/grid_border/border.rs`
+//! except where two planes lie that close. `tests/lanes/border.rs`
 //! measures both: at most 0.18 of that bound and 1.4·10^−7 on the normal,
 //! over random samples in 2D, 3D and 4D, lattice values, sparse points,
 //! window mode and samples around pairs of points 10^−3 cells apart. The
@@ -72,7 +72,6 @@ use super::generate::UNIT;
 use super::lanes::{Eight, Lanes, One};
 use super::locate::Located;
 use super::periodic::wrap;
-use super::search::WHOLE;
 use super::{by_eights, per_axis, Grid, Outputs, Period, Point, Simd, SizeError};
 use crate::config::{Config, ConfigError, Metric};
 use crate::definition::INVALID_ID;
@@ -325,7 +324,7 @@ impl<const D: usize> SimdBorder<D> {
     /// eight-lane dispatch (its AVX2 copy where that runs).
     fn eight(&self, at: &Located<Eight, D>) -> Border8<D> {
         let k = &self.kernel;
-        let (_, _, raw) = k.dispatch8_stage::<WHOLE>(at, Best::empty());
+        let (_, _, raw) = k.dispatch8_whole(at);
         let (plane, found) = k.border_search8(at, &raw);
         let r = Self::result::<Eight>(k, at, &raw, &plane, found);
         Border8 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
@@ -335,7 +334,7 @@ impl<const D: usize> SimdBorder<D> {
     /// operations per lane as [`SimdBorder::eight`], so the same bits.
     fn one(&self, at: &Located<One, D>) -> Border32<D> {
         let k = &self.kernel;
-        let (_, _, raw) = k.dispatch_stage::<One, WHOLE>(at, Best::empty());
+        let (_, _, raw) = k.dispatch_one(at);
         let (plane, found) = k.border_search::<One>(at, &raw);
         let r = Self::result::<One>(k, at, &raw, &plane, found);
         Border32 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
@@ -396,7 +395,7 @@ mod runtime_avx2_tests {
         for batch in 0..1500 {
             let points = test_batch::<D>(12, batch);
             let at = k.locate::<Eight>(&points);
-            let (_, _, raw) = k.dispatch8_stage::<WHOLE>(&at, Best::empty());
+            let (_, _, raw) = k.dispatch8_whole(&at);
             let (plain, plain_found) = k.border_search::<Eight>(&at, &raw);
             // SAFETY: `runtime_avx2` returned true above.
             #[allow(unsafe_code)]

@@ -66,10 +66,11 @@ use super::generate::UNIT;
 #[cfg(target_feature = "avx512f")]
 use super::lanes::Sixteen;
 use super::lanes::{Eight, Lanes};
+use super::metric::Others;
 use super::region::{Axes, Band, Region};
 use super::sample::GridSample;
 use super::tiles::min_max;
-use super::{Chebyshev, Euclid, Grid, Manhattan, Metric32, Minkowski, Outputs, Simd};
+use super::{Euclid, Grid, Metric32, Outputs, Simd};
 use crate::config::{Metric, Mode};
 use crate::definition::MAX_CELL_COORD;
 
@@ -154,9 +155,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
         #[cfg(feature = "parallel")]
         if parallel {
-            use rayon::prelude::*;
-            let band = |(b, dst): (usize, &mut [T])| self.band(grid, &axes, b * BAND, dst);
-            out.par_chunks_mut(BAND * width).enumerate().for_each(band);
+            crate::parallel::for_each_chunk(out, BAND * width, &|b, dst| self.band(grid, &axes, b * BAND, dst));
             return true;
         }
         let _ = parallel;
@@ -215,14 +214,13 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             T::per_sample(self, grid, first * grid.size[0], out);
             return;
         }
-        // IDs only where the tiles read them: whole results with IDs asked for.
-        let ids = T::FULL && self.outputs != Outputs::Distances;
+        // IDs only where the tiles read them: whole results with IDs asked
+        // for, or of the other metrics, whose tiles always track them.
+        let ids = T::FULL && (self.outputs != Outputs::Distances || self.config.metric != Metric::Euclidean);
         let band = Band { grid, axes, first, region: Region::generate(self, lo, hi, ids) };
-        match (self.config.metric, self.outputs) {
-            (Metric::Euclidean, o) => self.tiles_euclid(o, &band, out),
-            (Metric::Manhattan, o) => self.tiles_outputs(Manhattan, o, &band, out),
-            (Metric::Chebyshev, o) => self.tiles_outputs(Chebyshev, o, &band, out),
-            (Metric::Minkowski(p), o) => self.tiles_outputs(Minkowski(p), o, &band, out),
+        match Others::of(self.config.metric) {
+            None => self.tiles_euclid(self.outputs, &band, out),
+            Some(m) => self.tiles_others(m, &band, out),
         }
     }
 
@@ -244,15 +242,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             return;
         }
         #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-        if super::runtime_avx2() {
-            // SAFETY: `tiles_avx2` requires AVX2 and nothing else, and
-            // `runtime_avx2` has just seen the CPU report it.
-            #[allow(unsafe_code)]
-            return unsafe { self.tiles_avx2(o, band, out) };
+        {
+            if super::runtime_avx2() {
+                // SAFETY: `tiles_avx2` requires AVX2 and nothing else, and
+                // `runtime_avx2` has just seen the CPU report it.
+                #[allow(unsafe_code)]
+                return unsafe { self.tiles_avx2(o, band, out) };
+            }
+            // A CPU without AVX2 (x86-64 before 2013, or a ceiling of
+            // SSE2): the per-sample kernel, the same bits. A copy of the
+            // tile loops in SSE2 would cost every default build a tenth of
+            // each kernel's code for CPUs that rarely run one.
+            T::per_sample(self, band.grid, band.first * band.grid.size[0], out)
         }
         // Out of line, as the other metrics' loops: where sixteen lanes run,
         // this copy would otherwise sit inside theirs.
-        self.tiles_outputs(Euclid, o, band, out)
+        #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx2"))))]
+        self.tiles_eight(o, band, out)
     }
 
     /// [`Simd::tiles_euclid`]'s eight-lane loops compiled with AVX2 enabled.
@@ -271,18 +277,38 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         band: &Band<'_, D>,
         out: &mut [T],
     ) {
-        // Distances alone compute nothing else, whatever the Simd was built for.
-        match if T::FULL { o } else { Outputs::Distances } {
+        // Distances alone compute nothing else, whatever the Simd was built
+        // for. A branch on the constant alone, so that an instantiation
+        // compiles only the loops it can run.
+        if !T::FULL {
+            return self.tiles::<L, K, M, T, false, false>(m, band, out);
+        }
+        match o {
             Outputs::Distances => self.tiles::<L, K, M, T, false, false>(m, band, out),
             Outputs::Ids => self.tiles::<L, K, M, T, true, false>(m, band, out),
             Outputs::IdsAndDeltas => self.tiles::<L, K, M, T, true, true>(m, band, out),
         }
     }
 
-    /// The other metrics' tile loops, eight lanes, out of line (as
-    /// `search_outputs`).
+    /// The Euclidean tile loops in eight lanes, out of line (where the
+    /// build has AVX2, or is not for x86-64).
+    #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx2"))))]
     #[inline(never)]
-    fn tiles_outputs<M: Metric32, T: GridSample<D, N>>(&self, m: M, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
-        self.tiles_for::<Eight, 8, M, T>(m, o, band, out)
+    fn tiles_eight<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
+        self.tiles_for::<Eight, 8, Euclid, T>(Euclid, o, band, out)
+    }
+
+    /// The other metrics' tile loops, eight lanes, out of line, one
+    /// instantiation for the three of them and every output set, as
+    /// `search_outputs`: whole results track IDs and deltas and write what
+    /// the outputs ask for ([`Simd::forget_unasked`]), distances alone
+    /// compute nothing else.
+    #[inline(never)]
+    fn tiles_others<T: GridSample<D, N>>(&self, m: Others, band: &Band<'_, D>, out: &mut [T]) {
+        if T::FULL {
+            self.tiles::<Eight, 8, Others, T, true, true>(m, band, out)
+        } else {
+            self.tiles::<Eight, 8, Others, T, false, false>(m, band, out)
+        }
     }
 }

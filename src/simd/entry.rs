@@ -9,7 +9,7 @@ use super::features::{Features32, Features8};
 use super::generate::{PointConstants, Splat, WideConstants, UNIT};
 use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::locate::Located;
-use super::metric::{distance_of_rank, Chebyshev, Euclid, Manhattan, Metric32, Minkowski};
+use super::metric::{distance_of_rank, Euclid, Others};
 use super::search::{logical_block, mark_invalid, Stages, WHOLE};
 use super::{runtime_avx512, Outputs, Simd};
 use crate::config::{Config, ConfigError, Metric};
@@ -97,7 +97,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// ```
     pub fn evaluate(&self, x: [f64; D]) -> Features32<D, N> {
         let located = self.locate::<One>(&[x]);
-        let best = self.dispatch::<One>(&located);
+        let best = self.dispatch_one(&located).0;
         Features32 { distance: best.rank, delta: best.delta, id: best.id }
     }
 
@@ -133,7 +133,24 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// same bits, in fewer instructions.
     #[inline(always)]
     pub(super) fn dispatch8(&self, at: &Located<Eight, D>) -> Best<Eight, D, N> {
-        self.dispatch8_stage::<WHOLE>(at, Best::empty()).0
+        self.dispatch8_whole(at).0
+    }
+
+    /// The whole 8-lane search ([`Simd::dispatch8_stage`]), out of line:
+    /// one copy per kernel that every eight-lane entry point calls (eight
+    /// points, periodic, in a cell, a grid's per-sample lanes, the border),
+    /// where each would otherwise compile the search into itself.
+    #[inline(never)]
+    pub(super) fn dispatch8_whole(&self, at: &Located<Eight, D>) -> Stages<Eight, D, N> {
+        self.dispatch8_stage::<WHOLE>(at, Best::empty())
+    }
+
+    /// The whole one-lane search, out of line for the same reason as
+    /// [`Simd::dispatch8_whole`]: one point, periodic, in a cell, the
+    /// border's one point.
+    #[inline(never)]
+    pub(super) fn dispatch_one(&self, at: &Located<One, D>) -> Stages<One, D, N> {
+        self.dispatch_stage::<One, WHOLE>(at, Best::empty())
     }
 
     /// [`Simd::dispatch8`], or one stage of the search (see [`Stages`]).
@@ -204,30 +221,47 @@ impl<const D: usize, const N: usize> Simd<D, N> {
 }
 
 impl<const D: usize, const N: usize> Simd<D, N> {
-    /// Picks the monomorphised kernel for the metric and outputs, then
-    /// converts ranks to distances and marks bad lanes.
-    #[inline(always)]
-    pub(super) fn dispatch<L: Lanes>(&self, at: &Located<L, D>) -> Best<L, D, N> {
-        self.dispatch_stage::<L, WHOLE>(at, Best::empty()).0
-    }
-
-    /// [`Simd::dispatch`], or one stage of the search (see [`Stages`]),
-    /// from the candidates in `start`.
+    /// The monomorphised search for the metric and outputs, then distances
+    /// from ranks and bad lanes marked: the whole search, or one stage of
+    /// it (see [`Stages`]), from the candidates in `start`.
     #[inline(always)]
     pub(super) fn dispatch_stage<L: Lanes, const STAGE: u8>(
         &self,
         at: &Located<L, D>,
         start: Best<L, D, N>,
     ) -> Stages<L, D, N> {
-        let (raw, open) = match (self.config.metric, self.outputs) {
-            (Metric::Euclidean, Outputs::Distances) => self.search::<L, Euclid, false, false, STAGE>(Euclid, at, start),
-            (Metric::Euclidean, Outputs::Ids) => self.search::<L, Euclid, true, false, STAGE>(Euclid, at, start),
-            (Metric::Euclidean, Outputs::IdsAndDeltas) => {
-                self.search::<L, Euclid, true, true, STAGE>(Euclid, at, start)
-            }
-            (Metric::Manhattan, o) => self.search_outputs::<L, Manhattan, STAGE>(Manhattan, o, at, start),
-            (Metric::Chebyshev, o) => self.search_outputs::<L, Chebyshev, STAGE>(Chebyshev, o, at, start),
-            (Metric::Minkowski(p), o) => self.search_outputs::<L, Minkowski, STAGE>(Minkowski(p), o, at, start),
+        self.dispatch_metric::<L, STAGE, true>(at, start)
+    }
+
+    /// [`Simd::dispatch_stage`] for a caller that runs only the Euclidean
+    /// metric (it has checked the configuration's): the other metrics'
+    /// search is not instantiated in it. Given another metric it would
+    /// return `start`'s candidates with every lane final.
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
+    #[inline(always)]
+    pub(super) fn dispatch_euclid_stage<L: Lanes, const STAGE: u8>(
+        &self,
+        at: &Located<L, D>,
+        start: Best<L, D, N>,
+    ) -> Stages<L, D, N> {
+        debug_assert_eq!(self.config.metric, Metric::Euclidean);
+        self.dispatch_metric::<L, STAGE, false>(at, start)
+    }
+
+    /// The search for the configuration's metric and outputs (the other
+    /// metrics only where `OTHERS`), then distances and bad lanes.
+    #[inline(always)]
+    fn dispatch_metric<L: Lanes, const STAGE: u8, const OTHERS: bool>(
+        &self,
+        at: &Located<L, D>,
+        start: Best<L, D, N>,
+    ) -> Stages<L, D, N> {
+        let (raw, open) = match (Others::of(self.config.metric), self.outputs) {
+            (None, Outputs::Distances) => self.search::<L, Euclid, false, false, STAGE>(Euclid, at, start),
+            (None, Outputs::Ids) => self.search::<L, Euclid, true, false, STAGE>(Euclid, at, start),
+            (None, Outputs::IdsAndDeltas) => self.search::<L, Euclid, true, true, STAGE>(Euclid, at, start),
+            (Some(m), o) if OTHERS => self.search_outputs::<L, STAGE>(m, o, at, start),
+            (Some(_), _) => (start, L::lt(L::f(1.0), L::f(0.0))),
         };
         let mut best = raw;
         self.finish::<L, true>(&mut best);
@@ -257,24 +291,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// [`Simd::dispatch_avx2`]), and the other metrics run the build's own
     /// instructions.
     ///
-    /// One instantiation per metric serves every output set: the search
-    /// with IDs and deltas, then the outputs not asked for put back to what
-    /// the search without them leaves (`start`'s, never written). The
-    /// distances are the same bits: the list holds the same N smallest
-    /// ranks whether ties are ordered by ID or not. Each instantiation of
-    /// the search is a sizeable part of a user's build, and these metrics
-    /// are the rarer ones: a third of the copies, paid for by tracking IDs
-    /// and deltas where only distances are asked (not measured).
+    /// One instantiation serves the three metrics ([`Others`], chosen at
+    /// run time) and every output set: the search with IDs and deltas, then
+    /// the outputs not asked for put back to what the search without them
+    /// leaves (`start`'s, never written). The distances are the same bits:
+    /// the list holds the same N smallest ranks whether ties are ordered by
+    /// ID or not. Each instantiation of the search is a sizeable part of a
+    /// user's build, and these metrics are the rarer ones.
     #[inline(never)]
-    pub(super) fn search_outputs<L: Lanes, M: Metric32, const STAGE: u8>(
+    pub(super) fn search_outputs<L: Lanes, const STAGE: u8>(
         &self,
-        m: M,
+        m: Others,
         o: Outputs,
         at: &Located<L, D>,
         start: Best<L, D, N>,
     ) -> (Best<L, D, N>, L::M) {
         let (id, delta) = (start.id, start.delta);
-        let (mut best, open) = self.search::<L, M, true, true, STAGE>(m, at, start);
+        let (mut best, open) = self.search::<L, Others, true, true, STAGE>(m, at, start);
         if o != Outputs::IdsAndDeltas {
             best.delta = delta;
         }
@@ -372,7 +405,7 @@ mod runtime_avx2_tests {
                 let points = test_batch::<D>(11, batch);
                 let located = kernel.locate::<Eight>(&points);
                 lanewise += usize::from(matches!(located.cells, Cells::Full(_)));
-                let plain = kernel.dispatch::<Eight>(&located);
+                let plain = kernel.dispatch_stage::<Eight, WHOLE>(&located, Best::empty()).0;
                 // SAFETY: `runtime_avx2` returned true above.
                 #[allow(unsafe_code)]
                 let avx2 = unsafe { kernel.dispatch_avx2::<WHOLE>(&located, Best::empty()).0 };

@@ -47,6 +47,12 @@ pub trait Metric32: Copy {
     /// into [`Metric32::rest`]: then a row of samples along axis 0 shares
     /// the rest of every candidate (the coherent path relies on it).
     const SPLITS: bool = true;
+    /// [`Metric32::SPLITS`] for this value of the metric: a metric chosen at
+    /// run time answers per value.
+    #[inline(always)]
+    fn splits(&self) -> bool {
+        Self::SPLITS
+    }
     /// Rank of a vector: the terms of axes 1, 2, … folded in order
     /// ([`Metric32::rest`]), then axis 0's term folded in last.
     #[inline(always)]
@@ -83,6 +89,67 @@ pub struct Chebyshev;
 /// power overflows or underflows for any p ≥ 1, and rounded to f32 once.
 #[derive(Clone, Copy, Debug)]
 pub struct Minkowski(pub f64);
+
+/// Manhattan, Chebyshev and Minkowski as one type, the metric chosen at
+/// run time: the kernel instantiated once for the three rarer metrics
+/// instead of once each (each instantiation of the search is a sizeable
+/// part of a build). Every value runs the operations of its own type
+/// above ([`Manhattan`], [`Chebyshev`], [`Minkowski`]), so the bits are
+/// theirs; the choice is a branch on a value that never changes within a
+/// call.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Others {
+    /// As [`Manhattan`].
+    Manhattan,
+    /// As [`Chebyshev`].
+    Chebyshev,
+    /// As [`Minkowski`].
+    Minkowski(f64),
+}
+
+impl Others {
+    /// The metric in lanes for a configuration's metric other than
+    /// Euclidean; `None` for Euclidean.
+    pub(super) fn of(metric: Metric) -> Option<Self> {
+        match metric {
+            Metric::Euclidean => None,
+            Metric::Manhattan => Some(Others::Manhattan),
+            Metric::Chebyshev => Some(Others::Chebyshev),
+            Metric::Minkowski(p) => Some(Others::Minkowski(p)),
+        }
+    }
+}
+
+impl Metric32 for Others {
+    #[inline(always)]
+    fn splits(&self) -> bool {
+        !matches!(self, Others::Minkowski(_))
+    }
+    #[inline(always)]
+    fn term<L: Lanes>(&self, x: L::F) -> L::F {
+        L::abs(x)
+    }
+    #[inline(always)]
+    fn fold<L: Lanes>(&self, a: L::F, b: L::F) -> L::F {
+        match *self {
+            Others::Manhattan => Manhattan.fold::<L>(a, b),
+            Others::Chebyshev => Chebyshev.fold::<L>(a, b),
+            Others::Minkowski(p) => Minkowski(p).fold::<L>(a, b),
+        }
+    }
+    #[inline(always)]
+    fn rank_of_distance<L: Lanes>(&self, d: L::F) -> L::F {
+        d
+    }
+    #[inline(always)]
+    fn rank<L: Lanes, const D: usize>(&self, v: &[L::F; D]) -> L::F {
+        match *self {
+            Others::Manhattan => Manhattan.rank::<L, D>(v),
+            Others::Chebyshev => Chebyshev.rank::<L, D>(v),
+            Others::Minkowski(p) => Minkowski(p).rank::<L, D>(v),
+        }
+    }
+}
 
 impl Metric32 for Euclid {
     #[inline(always)]

@@ -56,9 +56,12 @@
 //!   takes the wider search, shell by shell, masked to the lanes that still
 //!   need it (a cold path: 0.003 % of samples for 3D F8 at λ 5).
 //! - **Compile-time choices.** Dimension `D` and order `N` are const
-//!   generics; the metric and the outputs (distances, IDs, deltas) are
-//!   dispatched once per call into monomorphised loops, so nothing the caller
-//!   did not ask for is computed in the hot loop.
+//!   generics; the Euclidean metric and the outputs (distances, IDs,
+//!   deltas) are dispatched once per call into monomorphised loops, so
+//!   nothing the caller did not ask for is computed in the hot loop. The
+//!   other three metrics share one instantiation (the metric a value tested
+//!   per fold, IDs and deltas always tracked): they are the rarer ones, and
+//!   each instantiation of the search is a sizeable part of a build.
 //! - **Batches** ([`batch`]): slices of any [`Point`] type, regular
 //!   [`Grid`]s, rayon tiles (feature `parallel`) and points given as a cell
 //!   plus a fraction for large worlds.
@@ -112,7 +115,10 @@
 //! The other metrics' kernels stay out of the copy and run the build's own
 //! instructions: copying all twelve kernels (four metrics, three output
 //! choices) doubled the optimised build of the crate, and the Euclidean
-//! metric is the one the speed figures are about.
+//! metric is the one the speed figures are about. The Euclidean grid tiles
+//! exist in such a build only in that copy and the AVX-512 one: on a CPU
+//! without AVX2 (or under a ceiling of SSE2) its grids take the per-sample
+//! kernel, the same bits.
 //!
 //! Where the CPU also has AVX-512, a build without it runs Euclidean slices
 //! ([`Simd::evaluate_slice`]) and the coherent path's tiles of grids

@@ -77,7 +77,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// ```
     pub fn evaluate_periodic(&self, x: [f64; D], period: &Period<D>) -> Features32<D, N> {
         let located = wrap::<One, D>(&[x], period);
-        let best = self.dispatch::<One>(&located);
+        let best = self.dispatch_one(&located).0;
         Features32 { distance: best.rank, delta: best.delta, id: best.id }
     }
 

@@ -194,7 +194,7 @@ impl<const D: usize> Grid<D> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        let tile = |(t, dst): (usize, &mut [T])| {
+        let tile = |t: usize, dst: &mut [T]| {
             for (c, d8) in dst.chunks_mut(8).enumerate() {
                 let start = t * TILE + c * 8;
                 let block: [[f64; D]; 8] = std::array::from_fn(|i| self.point(start + i.min(d8.len() - 1)));
@@ -202,12 +202,11 @@ impl<const D: usize> Grid<D> {
             }
         };
         #[cfg(feature = "parallel")]
-        {
-            use rayon::prelude::*;
-            out.par_chunks_mut(TILE).enumerate().for_each(tile);
-        }
+        crate::parallel::for_each_chunk(out, TILE, &tile);
         #[cfg(not(feature = "parallel"))]
-        out.chunks_mut(TILE).enumerate().for_each(tile);
+        for (t, dst) in out.chunks_mut(TILE).enumerate() {
+            tile(t, dst);
+        }
         Ok(())
     }
 

@@ -4,7 +4,7 @@
 
 use super::best::Best;
 use super::generate::{words, UNIT};
-use super::lanes::{Lanes, WIDEST};
+use super::lanes::{Lanes, One, WIDEST};
 use super::locate::Located;
 use super::metric::Metric32;
 use super::{per_axis, Simd};
@@ -130,6 +130,18 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
         // Every lane is final: no lane is open.
         (best, L::lt(one, L::f(0.0)))
+    }
+
+    /// The whole search in one lane, as ranks in lane units (no distances,
+    /// no bad lanes marked), out of line: the coherent paths' lanes left
+    /// uncertified take it, and one copy serves every lane set's tiles.
+    #[inline(never)]
+    pub(super) fn search_one<M: Metric32, const IDS: bool, const DELTAS: bool>(
+        &self,
+        metric: M,
+        at: &Located<One, D>,
+    ) -> Best<One, D, N> {
+        self.search::<One, M, IDS, DELTAS, WHOLE>(metric, at, Best::empty()).0
     }
 
     /// The cold path: shells of radius 2, 3, … for the lanes in `open`.

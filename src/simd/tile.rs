@@ -8,7 +8,6 @@ use super::lanes::{Lanes, One, WIDEST};
 use super::locate::Located;
 use super::metric::distance_of_rank;
 use super::region::{next_cell, Region};
-use super::search::WHOLE;
 use super::tiles::{
     cell_gap, inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, Spill, Tile, SLACK_ABS,
     SLACK_REL,
@@ -20,23 +19,29 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// One tile: the points of its own cells, the bound they give, the
     /// other candidates, the certificate, and the per-sample kernel for
     /// lanes left uncertified. Ranks in lane units. `rows` and `near` are
-    /// the tile row's, from [`Simd::cell_rows`]. `local`: the caller
+    /// the tile row's, from [`Simd::cell_rows`]. `LOCAL`: the caller
     /// writes the distances alone, so that the search may run on a local
-    /// copy of the ranks.
+    /// copy of the ranks (a constant, so that an instantiation compiles
+    /// only the search it runs).
     #[inline(always)]
-    pub(super) fn tile<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+    pub(super) fn tile<
+        L: Lanes,
+        const K: usize,
+        M: Metric32,
+        const IDS: bool,
+        const DELTAS: bool,
+        const LOCAL: bool,
+    >(
         &self,
         metric: M,
         region: &Region<D>,
         t: &Tile<L, D>,
         (rows, near): (&[CellRow<L, D>], &[f32]),
-        local: bool,
         best: &mut [Best<L, D, N>; K],
     ) {
         // Sixteen lanes run only with AVX-512 and its 32 vector registers;
         // eight may run with AVX2 and its 16.
-        let fits = N <= if K >= 16 { 2 } else { 1 };
-        let open = if local && !IDS && !DELTAS && fits {
+        if LOCAL && !IDS && !DELTAS && N <= if K >= 16 { 2 } else { 1 } {
             // The ranks in a local array that never leaves this function,
             // so that they stay in registers through the candidates, at
             // most half the register file. Measured only where it pays:
@@ -48,14 +53,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             for (b, l) in best.iter_mut().zip(&ranks) {
                 b.rank = l.rank;
             }
-            open
-        } else {
-            for b in best.iter_mut() {
-                b.reset::<IDS, DELTAS>();
+            if let Some(certified) = open {
+                self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
             }
-            self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, (rows, near), best)
-        };
-        if let Some(certified) = open {
+            return;
+        }
+        for b in best.iter_mut() {
+            b.reset::<IDS, DELTAS>();
+        }
+        if let Some(certified) = self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, (rows, near), best) {
             self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
         }
     }
@@ -271,9 +277,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let id = L::u(id);
         let d_row: [L::F; D] = per_axis(|a| if a == 0 { L::f(0.0) } else { L::sub(row_shift[a], L::f(q[a])) });
         let d_row_lanes: [[f32; WIDEST]; D] =
-            if DELTAS || !M::SPLITS { per_axis(|a| lanes_of::<L>(d_row[a])) } else { [[0.0; WIDEST]; D] };
+            if DELTAS || !metric.splits() { per_axis(|a| lanes_of::<L>(d_row[a])) } else { [[0.0; WIDEST]; D] };
         let delta = |k: usize| -> [L::F; D] { per_axis(|a| if a == 0 { dx } else { L::f(d_row_lanes[a][k]) }) };
-        if M::SPLITS && D > 1 {
+        if metric.splits() && D > 1 {
             let first = metric.term::<L>(dx);
             for (cell, v) in spill.0.iter().zip(lanes_of::<L>(metric.rest::<L, D>(&d_row))) {
                 cell.set(v);
@@ -333,7 +339,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                     std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; WIDEST]);
                 let fr: [[f32; WIDEST]; D] = std::array::from_fn(|a| [f(a); WIDEST]);
                 let at = Located::<One, D>::lanewise(cell, &fr, [true; WIDEST]);
-                let one = self.search::<One, M, IDS, DELTAS, WHOLE>(metric, &at, Best::empty()).0;
+                let one = self.search_one::<M, IDS, DELTAS>(metric, &at);
                 for j in 0..N {
                     rank[j][i] = one.rank[j];
                     id[j][i] = one.id[j];

@@ -7,7 +7,8 @@ use super::generate::UNIT;
 use super::lanes::{Lanes, One, WIDEST};
 use super::region::{next_cell, Band, Region};
 use super::sample::GridSample;
-use super::{per_axis, Metric32, Simd};
+use super::{per_axis, Metric32, Outputs, Simd};
+use crate::definition::INVALID_ID;
 use std::cell::Cell;
 
 /// Asks the CPU to bring the cache lines of `v` in, ready to be written:
@@ -243,13 +244,33 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                         prefetch_write(&out[o..o + next_cols]);
                     }
                 }
-                self.tile::<L, K, M, IDS, DELTAS>(metric, region, &tile, (&cell_rows, &near), !T::FULL, &mut best);
+                if T::FULL {
+                    self.tile::<L, K, M, IDS, DELTAS, false>(metric, region, &tile, (&cell_rows, &near), &mut best);
+                } else {
+                    self.tile::<L, K, M, IDS, DELTAS, true>(metric, region, &tile, (&cell_rows, &near), &mut best);
+                }
                 for (k, b) in best.iter_mut().enumerate().take(rows_here) {
                     self.finish::<L, DELTAS>(b);
+                    self.forget_unasked::<L, IDS, DELTAS>(b);
                     let o = (r0 + k) * width + x0;
                     T::write::<L, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
                 }
             }
+        }
+    }
+
+    /// The outputs a search tracked that the evaluator was not built for
+    /// put back to what a search without them leaves (zero deltas,
+    /// [`INVALID_ID`]): the other metrics' tiles track both whatever the
+    /// outputs (`tiles_others`). A test on values fixed for the call, where
+    /// the tracked outputs are the asked ones.
+    #[inline(always)]
+    pub(super) fn forget_unasked<L: Lanes, const IDS: bool, const DELTAS: bool>(&self, b: &mut Best<L, D, N>) {
+        if DELTAS && self.outputs != Outputs::IdsAndDeltas {
+            b.delta = [[L::f(0.0); D]; N];
+        }
+        if IDS && self.outputs == Outputs::Distances {
+            b.id = [L::u(INVALID_ID); N];
         }
     }
 

@@ -159,9 +159,8 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         };
         #[cfg(feature = "parallel")]
         {
-            use rayon::prelude::*;
             let rows = crate::simd::BAND;
-            out.par_chunks_mut(rows * width).enumerate().for_each(|(b, dst)| band(b * rows, dst));
+            crate::parallel::for_each_chunk(out, rows * width, &|b, dst| band(b * rows, dst));
         }
         #[cfg(not(feature = "parallel"))]
         {

@@ -3,7 +3,7 @@
 
 use worley::simd::lane;
 use worley::{Config, Features32, Metric, Mode, Outputs, Simd, INVALID_ID};
-use worley_harness::{self as harness, sample_point, Campaign, Report};
+use worley_harness::{self as harness, sample_point, Campaign, Report, Tier};
 
 fn check<const D: usize, const N: usize>(config: Config, samples: usize) -> Report {
     let kernel = Simd::<D, N>::new(config, Outputs::IdsAndDeltas).unwrap();
@@ -21,28 +21,48 @@ fn check<const D: usize, const N: usize>(config: Config, samples: usize) -> Repo
     report
 }
 
+fn agrees_with_brute_force(tier: Tier) {
+    let c = |order| Config { order, ..Config::default() };
+    check::<2, 1>(c(1), tier.of(200_000));
+    check::<3, 1>(c(1), tier.of(200_000));
+    check::<4, 1>(c(1), tier.of(100_000));
+    check::<2, 4>(c(4), tier.of(200_000));
+    check::<3, 4>(c(4), tier.of(200_000));
+    check::<4, 4>(c(4), tier.of(50_000));
+    check::<2, 8>(c(8), tier.of(50_000));
+    check::<3, 8>(c(8), tier.of(50_000));
+}
+
 #[test]
 fn simd_agrees_with_brute_force_within_1e_6() {
-    let c = |order| Config { order, ..Config::default() };
-    check::<2, 1>(c(1), 200_000);
-    check::<3, 1>(c(1), 200_000);
-    check::<4, 1>(c(1), 100_000);
-    check::<2, 4>(c(4), 200_000);
-    check::<3, 4>(c(4), 200_000);
-    check::<4, 4>(c(4), 50_000);
-    check::<2, 8>(c(8), 50_000);
-    check::<3, 8>(c(8), 50_000);
+    agrees_with_brute_force(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_simd_agrees_with_brute_force_within_1e_6() {
+    agrees_with_brute_force(Tier::Full);
+}
+
+fn every_metric(tier: Tier) {
+    for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
+        check::<3, 2>(Config { order: 2, metric, seed: 4, ..Config::default() }, tier.of(30_000));
+        check::<2, 8>(Config { order: 8, metric, seed: 4, ..Config::default() }, tier.of(20_000));
+    }
+    // Low density: most F8 samples need the wider search.
+    let r = check::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() }, tier.of(20_000));
+    assert!(r.orders[7].needs_wider > tier.of(5_000) as u64);
 }
 
 #[test]
 fn simd_agrees_for_every_metric_and_widens_when_needed() {
-    for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
-        check::<3, 2>(Config { order: 2, metric, seed: 4, ..Config::default() }, 30_000);
-        check::<2, 8>(Config { order: 8, metric, seed: 4, ..Config::default() }, 20_000);
-    }
-    // Low density: most F8 samples need the wider search.
-    let r = check::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() }, 20_000);
-    assert!(r.orders[7].needs_wider > 5_000);
+    every_metric(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_simd_agrees_for_every_metric_and_widens_when_needed() {
+    every_metric(Tier::Full);
 }
 
 fn assert_same<const D: usize, const N: usize>(a: &Features32<D, N>, b: &Features32<D, N>, what: &str) {

@@ -4,7 +4,7 @@
 //! line in hex; then a few thousand seeded random byte strings.
 
 use std::path::Path;
-use worley_harness::fuzz;
+use worley_harness::{fuzz, Tier};
 
 type Check = fn(&[u8]);
 
@@ -22,8 +22,8 @@ fn kept_fuzz_inputs_replay_cleanly() {
     let mut replayed = 0;
     for (target, check) in TARGETS {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions").join(target);
-        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
-        for entry in entries {
+        // Named inputs where a target has a folder of them.
+        for entry in std::fs::read_dir(&dir).into_iter().flatten() {
             let path = entry.unwrap().path();
             if path.is_file() && path.extension().is_none_or(|e| e != "md") {
                 let data = std::fs::read(&path).unwrap();
@@ -33,8 +33,10 @@ fn kept_fuzz_inputs_replay_cleanly() {
                 replayed += 1;
             }
         }
+        // Every target has its minimised corpus.
         let hex = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("fuzz/regressions/{target}.hex"));
-        let Ok(text) = std::fs::read_to_string(&hex) else { continue };
+        let text = std::fs::read_to_string(&hex).unwrap_or_else(|e| panic!("{}: {e}", hex.display()));
+        assert!(text.lines().count() > 0, "{}: no inputs", hex.display());
         for (line, input) in text.lines().enumerate() {
             let data: Vec<u8> = (0..input.len() / 2)
                 .map(|i| u8::from_str_radix(&input[2 * i..2 * i + 2], 16).expect("hex digits"))
@@ -45,12 +47,12 @@ fn kept_fuzz_inputs_replay_cleanly() {
             replayed += 1;
         }
     }
-    assert!(replayed > 0, "no kept fuzz inputs found under fuzz/regressions");
+    assert!(replayed > TARGETS.len(), "only {replayed} kept fuzz inputs found under fuzz/regressions");
     println!("replayed {replayed} kept inputs");
 }
 
-#[test]
-fn seeded_random_inputs_pass_every_check() {
+/// 3000 seeded byte strings per target in the whole campaign.
+fn seeded(tier: Tier) {
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
     let mut next = move || {
         state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -60,7 +62,7 @@ fn seeded_random_inputs_pass_every_check() {
         z ^ (z >> 31)
     };
     for (target, check) in TARGETS {
-        for case in 0..3000 {
+        for case in 0..tier.of(3000) {
             let len = (next() % 160) as usize;
             let data: Vec<u8> = (0..len).map(|_| next() as u8).collect();
             if std::panic::catch_unwind(|| check(&data)).is_err() {
@@ -68,4 +70,15 @@ fn seeded_random_inputs_pass_every_check() {
             }
         }
     }
+}
+
+#[test]
+fn seeded_random_inputs_pass_every_check() {
+    seeded(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_seeded_random_inputs_pass_every_check() {
+    seeded(Tier::Full);
 }

@@ -5,7 +5,7 @@
 //! the point set (`Pattern::for_each_point`) with the kernels.
 
 use worley::{Config, Grid, Metric, Outputs, Reference, Simd};
-use worley_harness::sample_point;
+use worley_harness::{sample_point, Tier};
 
 const EXPONENTS: [f64; 10] = [1.0, 1.5, 2.0, 3.0, 8.0, 30.0, 100.0, 400.0, 1000.0, 1e6];
 
@@ -113,10 +113,22 @@ fn minkowski_2d_every_exponent() {
 
 #[test]
 fn minkowski_3d_every_exponent() {
+    check::<3>(Tier::Quick.of(3000));
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_minkowski_3d_every_exponent() {
     check::<3>(3000);
 }
 
 #[test]
 fn minkowski_4d_every_exponent() {
+    check::<4>(Tier::Quick.of(600));
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_minkowski_4d_every_exponent() {
     check::<4>(600);
 }

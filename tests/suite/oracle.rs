@@ -1,9 +1,10 @@
-//! The reference kernel against the brute-force oracle: at least 10^6 random
-//! points per dimension in exact mode, plus every metric and the window
-//! mode's known failure.
+//! The reference kernel against the brute-force oracle: 10^6 random points
+//! per dimension in exact mode (a tenth in the quick tier,
+//! [`worley_harness::Tier`]), plus every metric and the window mode's known
+//! failure.
 
 use worley::{Config, Metric, Mode, Reference};
-use worley_harness::{self as harness, Campaign, Report};
+use worley_harness::{self as harness, Campaign, Report, Tier};
 
 fn campaign(oracle_samples: usize, pairs: usize) -> Campaign {
     Campaign { seed: 11, samples: 0, oracle_samples, range: 1000.0, pairs, grid_cells: 0 }
@@ -21,26 +22,47 @@ fn assert_exact(report: &Report) {
     assert!(report.is_exact(), "{}", report.to_table());
 }
 
-#[test]
-fn exact_mode_agrees_with_brute_force_on_a_million_points_per_dimension() {
+/// 10^6 points per dimension in the whole campaign.
+fn exact_mode(tier: Tier) {
     let config = Config { order: 4, ..Config::default() };
-    let c = campaign(1_000_000, 100_000);
+    let c = campaign(tier.of(1_000_000), tier.of(100_000));
     assert_exact(&run::<2>(config, &c));
     assert_exact(&run::<3>(config, &c));
     assert_exact(&run::<4>(config, &c));
 }
 
 #[test]
-fn every_metric_and_high_orders_agree_with_brute_force() {
-    let c = campaign(20_000, 20_000);
+fn exact_mode_agrees_with_brute_force_per_dimension() {
+    exact_mode(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_exact_mode_agrees_with_brute_force_on_a_million_points_per_dimension() {
+    exact_mode(Tier::Full);
+}
+
+fn every_metric(tier: Tier) {
+    let c = campaign(tier.of(20_000), tier.of(20_000));
     for metric in
         [Metric::Euclidean, Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(1.5), Metric::Minkowski(3.0)]
     {
         let config = Config { order: 8, metric, seed: 3, ..Config::default() };
         assert_exact(&run::<2>(config, &c));
         assert_exact(&run::<3>(config, &c));
-        assert_exact(&run::<4>(config, &campaign(5_000, 5_000)));
+        assert_exact(&run::<4>(config, &campaign(tier.of(5_000), tier.of(5_000))));
     }
+}
+
+#[test]
+fn every_metric_and_high_orders_agree_with_brute_force() {
+    every_metric(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_every_metric_and_high_orders_agree_with_brute_force() {
+    every_metric(Tier::Full);
 }
 
 #[test]

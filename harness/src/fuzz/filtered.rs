@@ -1,8 +1,8 @@
 //! Filtered textures under fuzzing: [`Texture::filtered`] and its batch
 //! calls at decoded positions, footprints and configurations.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
+use std::sync::{LazyLock, Mutex};
 
 use worley::config::{Config, Metric};
 use worley::texture::{Combination, Fractal, Texture};
@@ -38,14 +38,18 @@ pub fn filtered(data: &[u8]) {
     // their metric, and a Manhattan distance is at most √d Euclidean ones.
     let c = if kind == 1 { 2.0 } else { 1.0 } * if manhattan { f64::from(dim).sqrt() } else { 1.0 };
     // A texture measures its blend curve on its first filtered call (some
-    // 10^5 evaluations): one texture per basis is kept with its curve, and
-    // the decoded fractal sum is built from it (`Texture::with_fractal`).
+    // 10^5 evaluations): one texture per basis is kept with its curve, for
+    // the whole process (the test threads that replay inputs share them),
+    // and the decoded fractal sum is built from it (`Texture::with_fractal`).
     macro_rules! run {
         ($cache:ident, $d:literal, $n:literal) => {{
-            thread_local! {
-                static $cache: RefCell<HashMap<Key, Texture<$d, $n>>> = RefCell::new(HashMap::new());
-            }
-            let base = $cache.with(|m| m.borrow_mut().entry(key).or_insert_with(|| key.texture()).clone());
+            static $cache: LazyLock<Mutex<HashMap<Key, Texture<$d, $n>>>> =
+                LazyLock::new(|| Mutex::new(HashMap::new()));
+            // A check that panicked while holding the lock left the map
+            // whole: take it back.
+            let mut map = $cache.lock().unwrap_or_else(|e| e.into_inner());
+            let base = map.entry(key).or_insert_with(|| key.texture()).clone();
+            drop(map);
             let t = base.with_fractal(fractal).expect("a valid fractal sum");
             filtered_in::<$d, $n>(&t, c, &mut b)
         }};

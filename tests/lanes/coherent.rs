@@ -5,6 +5,7 @@
 
 use worley::{Config, Features32, Grid, Metric, Mode, Outputs, Simd};
 use worley_harness::grids::{grid_identity, same_bits, texture_identity};
+use worley_harness::Tier;
 
 fn identical<const D: usize, const N: usize>(config: Config, grids: usize, range: f64) {
     // A texture's octaves on the same grids, through values_grid.
@@ -23,30 +24,50 @@ fn identical<const D: usize, const N: usize>(config: Config, grids: usize, range
     }
 }
 
+fn every_dimension_and_order(tier: Tier) {
+    let c = Config::default();
+    identical::<2, 1>(c, tier.of(300), 100.0);
+    identical::<2, 3>(c, tier.of(200), 100.0);
+    identical::<3, 1>(c, tier.of(300), 100.0);
+    identical::<3, 2>(c, tier.of(200), 100.0);
+    identical::<3, 4>(c, tier.of(100), 100.0);
+    identical::<4, 1>(c, tier.of(100), 100.0);
+    identical::<4, 2>(c, tier.of(60), 100.0);
+    identical::<2, 16>(Config { density: 0.5, ..c }, tier.of(40), 100.0);
+}
+
 #[test]
 fn grids_give_the_per_sample_bits_in_every_dimension_and_order() {
-    let c = Config::default();
-    identical::<2, 1>(c, 300, 100.0);
-    identical::<2, 3>(c, 200, 100.0);
-    identical::<3, 1>(c, 300, 100.0);
-    identical::<3, 2>(c, 200, 100.0);
-    identical::<3, 4>(c, 100, 100.0);
-    identical::<4, 1>(c, 100, 100.0);
-    identical::<4, 2>(c, 60, 100.0);
-    identical::<2, 16>(Config { density: 0.5, ..c }, 40, 100.0);
+    every_dimension_and_order(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_grids_give_the_per_sample_bits_in_every_dimension_and_order() {
+    every_dimension_and_order(Tier::Full);
 }
 
 #[test]
 fn grids_give_the_per_sample_bits_for_every_metric_table_and_mode() {
+    every_metric_table_and_mode(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_grids_give_the_per_sample_bits_for_every_metric_table_and_mode() {
+    every_metric_table_and_mode(Tier::Full);
+}
+
+fn every_metric_table_and_mode(tier: Tier) {
     let c = Config::default();
     for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0), Metric::Minkowski(1.5)] {
-        identical::<3, 2>(Config { metric, seed: 9, ..c }, 60, 100.0);
-        identical::<2, 2>(Config { metric, seed: 9, ..c }, 60, 100.0);
+        identical::<3, 2>(Config { metric, seed: 9, ..c }, tier.of(60), 100.0);
+        identical::<2, 2>(Config { metric, seed: 9, ..c }, tier.of(60), 100.0);
     }
-    identical::<3, 2>(Config { bump: 0.5, ..c }, 100, 100.0);
-    identical::<3, 2>(Config { density: 1.0, ..c }, 100, 100.0);
-    identical::<3, 1>(Config { density: 20.0, seed: 3, ..c }, 100, 100.0);
-    identical::<3, 2>(Config { mode: Mode::Window, ..c }, 40, 100.0);
+    identical::<3, 2>(Config { bump: 0.5, ..c }, tier.of(100), 100.0);
+    identical::<3, 2>(Config { density: 1.0, ..c }, tier.of(100), 100.0);
+    identical::<3, 1>(Config { density: 20.0, seed: 3, ..c }, tier.of(100), 100.0);
+    identical::<3, 2>(Config { mode: Mode::Window, ..c }, tier.of(40), 100.0);
 }
 
 #[test]
