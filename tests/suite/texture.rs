@@ -6,7 +6,7 @@
 use worley::definition::FRACTION_ULP;
 use worley::texture::{bump, Combination, Fractal, Texture, TextureError};
 use worley::{Config, Grid, Metric, Outputs, Period, Simd};
-use worley_harness::uniform;
+use worley_harness::{uniform, Tier};
 
 /// Brute force over the periodic point set: every point of every cell of
 /// one period, repeated at shifts −2..=2 periods per axis (enough for the
@@ -50,12 +50,12 @@ fn periodic_brute_force<const D: usize>(
     found
 }
 
-fn periodic_against_brute_force<const D: usize>(period: [u32; D], metric: Metric) {
+fn periodic_against_brute_force<const D: usize>(period: [u32; D], metric: Metric, tier: Tier) {
     let config = Config { order: 4, metric, seed: 9, ..Config::default() };
     let kernel = Simd::<D, 4>::new(config, Outputs::Ids).unwrap();
     let p = Period::new(period).unwrap();
     let bound = |f: f64| 4.0 * f32::EPSILON as f64 * (f + 1.0 / kernel.pattern().scale());
-    for i in 0..400 {
+    for i in 0..tier.of(400) {
         let x: [f64; D] = std::array::from_fn(|a| (uniform(5, (i * D + a) as u64) - 0.5) * 40.0 * period[a] as f64);
         let got = kernel.evaluate_periodic(x, &p);
         let want = periodic_brute_force(&kernel, period, x, metric);
@@ -78,11 +78,21 @@ fn periodic_against_brute_force<const D: usize>(period: [u32; D], metric: Metric
 
 #[test]
 fn periodic_kernel_agrees_with_brute_force_over_periodic_images() {
-    periodic_against_brute_force::<2>([3, 5], Metric::Euclidean);
-    periodic_against_brute_force::<2>([4, 3], Metric::Manhattan);
-    periodic_against_brute_force::<3>([3, 4, 3], Metric::Euclidean);
-    periodic_against_brute_force::<3>([3, 3, 5], Metric::Chebyshev);
-    periodic_against_brute_force::<4>([3, 3, 3, 4], Metric::Euclidean);
+    periodic_images(Tier::Quick);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_periodic_kernel_agrees_with_brute_force_over_periodic_images() {
+    periodic_images(Tier::Full);
+}
+
+fn periodic_images(tier: Tier) {
+    periodic_against_brute_force::<2>([3, 5], Metric::Euclidean, tier);
+    periodic_against_brute_force::<2>([4, 3], Metric::Manhattan, tier);
+    periodic_against_brute_force::<3>([3, 4, 3], Metric::Euclidean, tier);
+    periodic_against_brute_force::<3>([3, 3, 5], Metric::Chebyshev, tier);
+    periodic_against_brute_force::<4>([3, 3, 3, 4], Metric::Euclidean, tier);
 }
 
 #[test]
@@ -315,29 +325,41 @@ fn invalid_texture_parameters_are_rejected_with_the_reason() {
 
 #[test]
 fn tabulated_ranges_match_a_fresh_measurement() {
+    // A quarter of the campaign: at a tenth, 5σ would cover every share
+    // from 0 to twice the expected one.
+    tabulated_ranges(50_000);
+}
+
+#[test]
+#[ignore = "campaign: cargo test -- --ignored"]
+fn campaign_tabulated_ranges_match_a_fresh_measurement() {
+    tabulated_ranges(200_000);
+}
+
+fn tabulated_ranges(samples: usize) {
     use worley::texture::{default_range, DEFAULT_RANGES, STANDARD};
-    const SAMPLES: usize = 200_000;
     // Fresh samples (another seed than `worley ranges` uses): the share below
     // the tabulated 0.1 % quantile and the share above the 99.9 % one are each
-    // binomial with p = 0.001, σ = √(p(1 − p)/n) ≈ 7.1e-5; allow 5σ.
-    fn shares<const D: usize>(c: &Combination, lo: f32, hi: f32) -> (f64, f64) {
+    // binomial with p = 0.001, σ = √(p(1 − p)/n) (7.1e-5 at 200,000 samples);
+    // allow 5σ.
+    fn shares<const D: usize>(c: &Combination, lo: f32, hi: f32, samples: usize) -> (f64, f64) {
         let t = Texture::<D, 4>::new(Config::default(), c.clone(), Fractal::default(), None).unwrap();
-        let points: Vec<[f64; D]> = (0..SAMPLES).map(|i| worley_harness::sample_point(99, i, 1000.0)).collect();
-        let mut v = vec![0f32; SAMPLES];
+        let points: Vec<[f64; D]> = (0..samples).map(|i| worley_harness::sample_point(99, i, 1000.0)).collect();
+        let mut v = vec![0f32; samples];
         t.values(&points, &mut v).unwrap();
-        let below = v.iter().filter(|&&x| x < lo).count() as f64 / SAMPLES as f64;
-        let above = v.iter().filter(|&&x| x > hi).count() as f64 / SAMPLES as f64;
+        let below = v.iter().filter(|&&x| x < lo).count() as f64 / samples as f64;
+        let above = v.iter().filter(|&&x| x > hi).count() as f64 / samples as f64;
         (below, above)
     }
-    let tolerance = 5.0 * (0.001f64 * 0.999 / SAMPLES as f64).sqrt();
+    let tolerance = 5.0 * (0.001f64 * 0.999 / samples as f64).sqrt();
     assert_eq!(DEFAULT_RANGES.len(), 3 * STANDARD.len());
     for &(dim, name, lo, hi) in DEFAULT_RANGES {
         let c: Combination = name.parse().unwrap();
         assert_eq!(default_range(dim, &c), Some(worley::texture::Range { lo, hi }));
         let (below, above) = match dim {
-            2 => shares::<2>(&c, lo, hi),
-            3 => shares::<3>(&c, lo, hi),
-            _ => shares::<4>(&c, lo, hi),
+            2 => shares::<2>(&c, lo, hi, samples),
+            3 => shares::<3>(&c, lo, hi, samples),
+            _ => shares::<4>(&c, lo, hi, samples),
         };
         assert!(
             (below - 0.001).abs() <= tolerance && (above - 0.001).abs() <= tolerance,
