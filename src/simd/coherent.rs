@@ -95,8 +95,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// Whether [`Simd::evaluate_grid`] takes the coherent path for `grid`:
     /// [`Mode::Exact`], eight steps along axis 0 within one cell
     /// (`8·|step[0]|·S ≤ 1`, S the [scale](crate::Pattern::scale)), rows
-    /// spanning fewer than 2^23 cells, and every coordinate valid. The results are the same bits either way; only the
-    /// speed differs.
+    /// spanning fewer than 2^23 cells, and every coordinate valid. The
+    /// results are the same bits either way; only the speed differs. (A
+    /// build without AVX2 runs the Euclidean tiles only where the CPU has
+    /// AVX2; elsewhere such a grid's samples take the per-sample kernel.)
     ///
     /// ```
     /// use worley::{Config, Grid, Mode, Outputs, Simd};
