@@ -170,7 +170,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         self.dispatch_stage::<Eight, STAGE>(at, start)
     }
 
-    /// [`Simd::dispatch`] in eight lanes, compiled with AVX2 enabled: `wide`
+    /// [`Simd::dispatch_stage`] in eight lanes, compiled with AVX2 enabled: `wide`
     /// keeps the SSE2 code it was built with, but LLVM lowers the Euclidean
     /// kernels inlined here again, turning the scalar fallbacks inside them
     /// (the 32-bit lane multiply above all) into AVX2 instructions. The

@@ -4,8 +4,9 @@
 //! metric, outputs, lanes) once, where a binary per file compiled it again
 //! in each file that used it. Filter by module: `cargo test --test suite
 //! oracle::`. The SIMD kernel's entry points and lanes, which CI tests
-//! again in each SIMD build, are the `lanes` and `grid_border` binaries
-//! (`tests/lanes/`, `tests/grid_border/`).
+//! again in each SIMD build, are the `lanes` binary (`tests/lanes/`).
+//! The long campaigns run in part by default and whole under `cargo test
+//! -- --ignored` ([`worley_harness::Tier`]).
 
 mod border;
 mod cell_hash;

@@ -10,7 +10,7 @@ use super::Bytes;
 
 /// The border's stated bound (user units): b comes from deltas of length up
 /// to F1 + 2b, each within a few f32 roundings, and from u = p_j − p₁
-/// rounded once (`tests/grid_border/border.rs` holds it on random points).
+/// rounded once (`tests/lanes/border.rs` holds it on random points).
 fn bound(f1: f64, b: f64, inv_scale: f64) -> f64 {
     4.0 * f64::from(f32::EPSILON) * (2.0 * f1 + 2.0 * b + inv_scale)
 }
