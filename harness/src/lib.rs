@@ -209,6 +209,32 @@ impl Tier {
     }
 }
 
+/// Two tests of one campaign, `campaign(tier)`: `$quick` runs it in part
+/// ([`Tier::Quick`]), `$whole` (ignored, so that `cargo test -- --ignored`
+/// runs it; named `campaign_…` by convention) whole.
+///
+/// ```
+/// fn strips(tier: worley_harness::Tier) {
+///     assert!(tier.of(6) >= 1);
+/// }
+/// worley_harness::tiered!(no_repeated_strips, campaign_no_repeated_strips, strips);
+/// ```
+#[macro_export]
+macro_rules! tiered {
+    ($quick:ident, $whole:ident, $campaign:path) => {
+        #[test]
+        fn $quick() {
+            $campaign($crate::Tier::Quick);
+        }
+
+        #[test]
+        #[ignore = "campaign: cargo test -- --ignored"]
+        fn $whole() {
+            $campaign($crate::Tier::Full);
+        }
+    };
+}
+
 /// Runs `f` over `0..n` in chunks, on all cores with the `parallel`
 /// feature, and returns the chunks' results in order.
 pub fn chunked<A: Send>(n: usize, f: impl Fn(std::ops::Range<usize>) -> A + Sync + Send) -> Vec<A> {

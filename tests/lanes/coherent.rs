@@ -36,27 +36,17 @@ fn every_dimension_and_order(tier: Tier) {
     identical::<2, 16>(Config { density: 0.5, ..c }, tier.of(40), 100.0);
 }
 
-#[test]
-fn grids_give_the_per_sample_bits_in_every_dimension_and_order() {
-    every_dimension_and_order(Tier::Quick);
-}
+worley_harness::tiered!(
+    grids_give_the_per_sample_bits_in_every_dimension_and_order,
+    campaign_grids_give_the_per_sample_bits_in_every_dimension_and_order,
+    every_dimension_and_order
+);
 
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_grids_give_the_per_sample_bits_in_every_dimension_and_order() {
-    every_dimension_and_order(Tier::Full);
-}
-
-#[test]
-fn grids_give_the_per_sample_bits_for_every_metric_table_and_mode() {
-    every_metric_table_and_mode(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_grids_give_the_per_sample_bits_for_every_metric_table_and_mode() {
-    every_metric_table_and_mode(Tier::Full);
-}
+worley_harness::tiered!(
+    grids_give_the_per_sample_bits_for_every_metric_table_and_mode,
+    campaign_grids_give_the_per_sample_bits_for_every_metric_table_and_mode,
+    every_metric_table_and_mode
+);
 
 fn every_metric_table_and_mode(tier: Tier) {
     let c = Config::default();

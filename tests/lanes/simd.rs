@@ -33,16 +33,11 @@ fn agrees_with_brute_force(tier: Tier) {
     check::<3, 8>(c(8), tier.of(50_000));
 }
 
-#[test]
-fn simd_agrees_with_brute_force_within_1e_6() {
-    agrees_with_brute_force(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_simd_agrees_with_brute_force_within_1e_6() {
-    agrees_with_brute_force(Tier::Full);
-}
+worley_harness::tiered!(
+    simd_agrees_with_brute_force_within_1e_6,
+    campaign_simd_agrees_with_brute_force_within_1e_6,
+    agrees_with_brute_force
+);
 
 fn every_metric(tier: Tier) {
     for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
@@ -54,16 +49,11 @@ fn every_metric(tier: Tier) {
     assert!(r.orders[7].needs_wider > tier.of(5_000) as u64);
 }
 
-#[test]
-fn simd_agrees_for_every_metric_and_widens_when_needed() {
-    every_metric(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_simd_agrees_for_every_metric_and_widens_when_needed() {
-    every_metric(Tier::Full);
-}
+worley_harness::tiered!(
+    simd_agrees_for_every_metric_and_widens_when_needed,
+    campaign_simd_agrees_for_every_metric_and_widens_when_needed,
+    every_metric
+);
 
 fn assert_same<const D: usize, const N: usize>(a: &Features32<D, N>, b: &Features32<D, N>, what: &str) {
     assert_eq!(a.distance.map(f32::to_bits), b.distance.map(f32::to_bits), "{what}: distances");

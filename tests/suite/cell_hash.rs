@@ -40,16 +40,11 @@ fn strips(tier: Tier) {
     }
 }
 
-#[test]
-fn no_repeated_strips_for_any_seed_or_dimension() {
-    strips(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_no_repeated_strips_for_any_seed_or_dimension() {
-    strips(Tier::Full);
-}
+worley_harness::tiered!(
+    no_repeated_strips_for_any_seed_or_dimension,
+    campaign_no_repeated_strips_for_any_seed_or_dimension,
+    strips
+);
 
 /// The hash as it was before axis words and their sum: each raw term xored
 /// into the chain.

@@ -72,13 +72,4 @@ fn seeded(tier: Tier) {
     }
 }
 
-#[test]
-fn seeded_random_inputs_pass_every_check() {
-    seeded(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_seeded_random_inputs_pass_every_check() {
-    seeded(Tier::Full);
-}
+worley_harness::tiered!(seeded_random_inputs_pass_every_check, campaign_seeded_random_inputs_pass_every_check, seeded);

@@ -111,24 +111,13 @@ fn minkowski_2d_every_exponent() {
     check::<2>(1500);
 }
 
-#[test]
-fn minkowski_3d_every_exponent() {
-    check::<3>(Tier::Quick.of(3000));
+fn minkowski_3d(tier: Tier) {
+    check::<3>(tier.of(3000));
 }
 
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_minkowski_3d_every_exponent() {
-    check::<3>(3000);
+fn minkowski_4d(tier: Tier) {
+    check::<4>(tier.of(600));
 }
 
-#[test]
-fn minkowski_4d_every_exponent() {
-    check::<4>(Tier::Quick.of(600));
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_minkowski_4d_every_exponent() {
-    check::<4>(600);
-}
+worley_harness::tiered!(minkowski_3d_every_exponent, campaign_minkowski_3d_every_exponent, minkowski_3d);
+worley_harness::tiered!(minkowski_4d_every_exponent, campaign_minkowski_4d_every_exponent, minkowski_4d);

@@ -31,16 +31,11 @@ fn exact_mode(tier: Tier) {
     assert_exact(&run::<4>(config, &c));
 }
 
-#[test]
-fn exact_mode_agrees_with_brute_force_per_dimension() {
-    exact_mode(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_exact_mode_agrees_with_brute_force_on_a_million_points_per_dimension() {
-    exact_mode(Tier::Full);
-}
+worley_harness::tiered!(
+    exact_mode_agrees_with_brute_force_per_dimension,
+    campaign_exact_mode_agrees_with_brute_force_on_a_million_points_per_dimension,
+    exact_mode
+);
 
 fn every_metric(tier: Tier) {
     let c = campaign(tier.of(20_000), tier.of(20_000));
@@ -54,16 +49,11 @@ fn every_metric(tier: Tier) {
     }
 }
 
-#[test]
-fn every_metric_and_high_orders_agree_with_brute_force() {
-    every_metric(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_every_metric_and_high_orders_agree_with_brute_force() {
-    every_metric(Tier::Full);
-}
+worley_harness::tiered!(
+    every_metric_and_high_orders_agree_with_brute_force,
+    campaign_every_metric_and_high_orders_agree_with_brute_force,
+    every_metric
+);
 
 #[test]
 fn low_density_forces_wide_searches_that_stay_exact() {

@@ -50,16 +50,11 @@ fn other_metrics(tier: Tier) {
     }
 }
 
-#[test]
-fn other_metrics_follow_the_poisson_law_of_their_own_ball() {
-    other_metrics(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_other_metrics_follow_the_poisson_law_of_their_own_ball() {
-    other_metrics(Tier::Full);
-}
+worley_harness::tiered!(
+    other_metrics_follow_the_poisson_law_of_their_own_ball,
+    campaign_other_metrics_follow_the_poisson_law_of_their_own_ball,
+    other_metrics
+);
 
 #[test]
 fn a_wrong_law_is_rejected() {

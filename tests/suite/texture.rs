@@ -76,16 +76,11 @@ fn periodic_against_brute_force<const D: usize>(period: [u32; D], metric: Metric
     }
 }
 
-#[test]
-fn periodic_kernel_agrees_with_brute_force_over_periodic_images() {
-    periodic_images(Tier::Quick);
-}
-
-#[test]
-#[ignore = "campaign: cargo test -- --ignored"]
-fn campaign_periodic_kernel_agrees_with_brute_force_over_periodic_images() {
-    periodic_images(Tier::Full);
-}
+worley_harness::tiered!(
+    periodic_kernel_agrees_with_brute_force_over_periodic_images,
+    campaign_periodic_kernel_agrees_with_brute_force_over_periodic_images,
+    periodic_images
+);
 
 fn periodic_images(tier: Tier) {
     periodic_against_brute_force::<2>([3, 5], Metric::Euclidean, tier);
