@@ -1,7 +1,8 @@
 //! The `worley` command: the main job (the harness on the default
 //! configuration and the image gallery), `worley check` (the harness on any
-//! configuration), `worley render` (one image), `worley tune` (the density
-//! sweep) and `worley ranges` (the combinations' output ranges).
+//! configuration), `worley render` (one image, or a window of it, as PNG,
+//! PFM and EXR), `worley stitch` (windows into the whole EXR), `worley tune`
+//! (the density sweep) and `worley ranges` (the combinations' output ranges).
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -26,8 +27,9 @@ struct Cli {
 enum Command {
     /// Run the harness on one configuration and print its report.
     Check(CheckArgs),
-    /// Render one image (PNG, and the raw values as PFM).
-    Render(RenderArgs),
+    /// Render one image, or a window of it (PNG, the raw values as PFM, and
+    /// the channels as OpenEXR).
+    Render(Box<RenderArgs>),
     /// Sweep the population density: speed against error per order.
     Tune(TuneArgs),
     /// Measure the output ranges of the standard combinations (the
@@ -35,6 +37,19 @@ enum Command {
     Ranges(RangesArgs),
     /// Write only the image gallery of the main job.
     Gallery(GalleryArgs),
+    /// Assemble the EXR files of `render --tile` or `--region` into the
+    /// whole image.
+    Stitch(StitchArgs),
+}
+
+#[derive(clap::Args)]
+struct StitchArgs {
+    /// The whole image to write (`-`: standard output).
+    #[arg(long)]
+    out: std::path::PathBuf,
+    /// The windows' EXR files, in any order.
+    #[arg(required = true)]
+    inputs: Vec<std::path::PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -149,6 +164,13 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => render_command(&args),
         Some(Command::Tune(args)) => tune(&args),
         Some(Command::Ranges(args)) => ranges(&args),
+        Some(Command::Stitch(args)) => worley_cli::bake::stitch(&args.inputs, &args.out).map(|line| {
+            if args.out.as_os_str() == "-" {
+                eprintln!("{line}");
+            } else {
+                println!("{line}");
+            }
+        }),
         Some(Command::Gallery(args)) => {
             worley_cli::render_cmd::gallery(&args.out, args.tile as usize, true).map(|written| {
                 for path in written {

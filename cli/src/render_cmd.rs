@@ -2,8 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::bake::{self, Channel};
 use crate::picture::{self, ColourMap, Rgb};
-use crate::views::{self as render, Shading, View};
+use crate::views::{self as render, Shading, View, Window};
 use clap::ValueEnum;
 use worley::config::DEFAULT_DENSITY;
 use worley::texture::{Combination, Fractal, Range, Texture};
@@ -30,6 +31,30 @@ pub struct RenderArgs {
     /// Also write the raw values as a greyscale PFM (32-bit floats).
     #[arg(long)]
     pub pfm: Option<PathBuf>,
+    /// Also write an OpenEXR file (`-`: standard output) with the channels of
+    /// --channels, compressed, the configuration in its header.
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    /// The EXR's channels, comma-separated: value (the texture, as the PFM),
+    /// F1, F2, F2-F1, id (F1's feature ID, 32-bit unsigned), delta (to F1's
+    /// point, one channel per axis), border, normal (the bump normal); or
+    /// all. Default: value, F1, F2, F2-F1, id, delta, and border or normal
+    /// where the combination or shading uses it.
+    #[arg(long, value_parser = crate::bake::parse_channels, requires = "exr")]
+    pub channels: Option<crate::bake::Channels>,
+    /// Bake only the pixels X..X+W, Y..Y+H of the image, as X,Y,W,H (every
+    /// output; the EXR places them in the whole image, see `worley stitch`).
+    #[arg(long, value_parser = parse_region, conflicts_with = "tile")]
+    pub region: Option<[usize; 4]>,
+    /// Bake only band I of N (0 <= I < N) of the image's rows, as I/N: a job
+    /// array's task I writes its band, `worley stitch` assembles them.
+    #[arg(long, value_parser = parse_tile)]
+    pub tile: Option<(usize, usize)>,
+    /// Planes along axis 2 (3D and 4D), one pixel apart from the slice's
+    /// Z on: the EXR holds one layer per plane (z0000, z0001, ...); the PNG
+    /// and PFM show the first plane.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub depth: u32,
     /// Dimension: 2, or a plane through 3D or 4D.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(2..=4))]
     pub dim: u8,
@@ -117,6 +142,23 @@ fn parse_size(s: &str) -> Result<(usize, usize), String> {
     }
 }
 
+fn parse_region(s: &str) -> Result<[usize; 4], String> {
+    let v: Vec<usize> = s.split(',').map(|v| v.trim().parse().ok()).collect::<Option<_>>().unwrap_or_default();
+    match v[..] {
+        [x, y, w, h] if w > 0 && h > 0 => Ok([x, y, w, h]),
+        _ => Err(format!("region {s:?}: use X,Y,W,H, whole pixels with W and H above 0")),
+    }
+}
+
+fn parse_tile(s: &str) -> Result<(usize, usize), String> {
+    let usage = || format!("tile {s:?}: use I/N with 0 <= I < N, e.g. 0/4");
+    let (i, n) = s.split_once('/').ok_or_else(usage)?;
+    match (i.trim().parse::<usize>(), n.trim().parse::<usize>()) {
+        (Ok(i), Ok(n)) if i < n => Ok((i, n)),
+        _ => Err(usage()),
+    }
+}
+
 fn parse_pair(s: &str) -> Result<(f64, f64), String> {
     let v: Vec<f64> = crate::commands::parse_list(s, "coordinate")?;
     let ok = v.iter().all(|x| x.is_finite());
@@ -156,7 +198,20 @@ impl RenderArgs {
             origin: [self.origin.0, self.origin.1],
             extent: self.extent,
             slice: [self.slice.0, self.slice.1],
+            depth: self.depth as usize,
         }
+    }
+
+    /// The pixels of each plane that this run bakes.
+    fn window(&self) -> Result<Window, String> {
+        let view = self.view();
+        let window = match (self.region, self.tile) {
+            (Some([x, y, width, height]), _) => Window { x, y, width, height, plane: 0 },
+            (None, Some((i, n))) => crate::bake::band(&view, i, n)?,
+            (None, None) => view.whole(),
+        };
+        render::check(&view, &window)?;
+        Ok(window)
     }
 
     fn shading(&self) -> Shading {
@@ -172,12 +227,75 @@ impl RenderArgs {
     }
 }
 
-/// Renders `combo` as the arguments say: raw values and the image.
+/// Renders `combo` as the arguments say: raw values and the image (of the
+/// window of `--region` or `--tile` in the first plane).
 pub fn render_combo(args: &RenderArgs, combo: &Combination) -> Result<(Vec<f32>, Rgb, Range), String> {
-    fn go<const D: usize, const N: usize>(
+    with_texture(args, combo, &|bake| bake.render(&args.window()?))
+}
+
+/// What a texture of any dimension and order can do for the command.
+trait Baker {
+    /// The values and the image of a window, and the colour range.
+    fn render(&self, window: &Window) -> Result<(Vec<f32>, Rgb, Range), String>;
+    /// The EXR planes of the window in every plane of the view.
+    fn planes(&self, window: &Window, channels: &[Channel]) -> Result<Vec<bake::Plane>, String>;
+}
+
+struct Textured<'a, const D: usize, const N: usize> {
+    args: &'a RenderArgs,
+    texture: Texture<D, N>,
+    range: Range,
+}
+
+impl<const D: usize, const N: usize> Baker for Textured<'_, D, N> {
+    fn render(&self, window: &Window) -> Result<(Vec<f32>, Rgb, Range), String> {
+        let a = self.args;
+        let (values, image) =
+            render::render_window(&self.texture, &a.view(), window, a.shading(), self.range, a.filtered)?;
+        Ok((values, image, self.range))
+    }
+
+    fn planes(&self, window: &Window, channels: &[Channel]) -> Result<Vec<bake::Plane>, String> {
+        let (a, view) = (self.args, self.args.view());
+        let source = bake::Source { texture: &self.texture, view: &view, filtered: a.filtered, strength: a.strength };
+        let bar = if view.depth > 1 {
+            crate::commands::progress(view.depth as u64, "planes")
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        let mut planes = Vec::new();
+        for plane in 0..view.depth {
+            let window = Window { plane, ..*window };
+            let value = if channels.contains(&Channel::Value) {
+                render::texture_values(&self.texture, &view, &window, a.filtered)?
+            } else {
+                Vec::new()
+            };
+            let name = (view.depth > 1).then(|| format!("z{plane:04}"));
+            let z = (D > 2).then(|| view.grid::<3>().point(plane * view.width * view.height)[2]);
+            let channels = bake::channels(&source, &window, value, channels)?;
+            planes.push(bake::Plane { name, z, channels, window });
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        Ok(planes)
+    }
+}
+
+/// Calls `f` with the texture the arguments describe.
+fn with_texture<R>(
+    args: &RenderArgs,
+    combo: &Combination,
+    f: &dyn Fn(&dyn Baker) -> Result<R, String>,
+) -> Result<R, String> {
+    fn go<const D: usize, const N: usize, R>(
         args: &RenderArgs,
         combo: &Combination,
-    ) -> Result<(Vec<f32>, Rgb, Range), String> {
+        f: &dyn Fn(&dyn Baker) -> Result<R, String>,
+    ) -> Result<R, String> {
+        if args.depth > 1 && D < 3 {
+            return Err(format!("--depth {}: planes along axis 2 need --dim 3 or 4", args.depth));
+        }
         let period = match &args.period {
             None => None,
             Some(Cells(p)) => {
@@ -191,24 +309,69 @@ pub fn render_combo(args: &RenderArgs, combo: &Combination) -> Result<(Vec<f32>,
             Some((lo, hi)) => Range { lo: lo as f32, hi: hi as f32 },
             None => texture.measure_range(100_000, 1),
         };
-        let (values, image) = render::render(&texture, &args.view(), args.shading(), range, args.filtered)?;
-        Ok((values, image, range))
+        f(&Textured { args, texture, range })
     }
     let order = combo.order().max(if args.shade == ShadeArg::Flagstones { 2 } else { 1 });
     // Orders 1, 2 and 4, the kernels `check` and `tune` build too: a
     // combination of F3 takes F1..F4, whose first three are F1..F3 bit for
     // bit (each kernel instantiation is a sizeable part of the build).
     match (args.dim, order) {
-        (2, 1) => go::<2, 1>(args, combo),
-        (2, 2) => go::<2, 2>(args, combo),
-        (2, _) => go::<2, 4>(args, combo),
-        (3, 1) => go::<3, 1>(args, combo),
-        (3, 2) => go::<3, 2>(args, combo),
-        (3, _) => go::<3, 4>(args, combo),
-        (_, 1) => go::<4, 1>(args, combo),
-        (_, 2) => go::<4, 2>(args, combo),
-        _ => go::<4, 4>(args, combo),
+        (2, 1) => go::<2, 1, R>(args, combo, f),
+        (2, 2) => go::<2, 2, R>(args, combo, f),
+        (2, _) => go::<2, 4, R>(args, combo, f),
+        (3, 1) => go::<3, 1, R>(args, combo, f),
+        (3, 2) => go::<3, 2, R>(args, combo, f),
+        (3, _) => go::<3, 4, R>(args, combo, f),
+        (_, 1) => go::<4, 1, R>(args, combo, f),
+        (_, 2) => go::<4, 2, R>(args, combo, f),
+        _ => go::<4, 4, R>(args, combo, f),
     }
+}
+
+/// The settings a bake's header records: the configuration and the view.
+fn settings(args: &RenderArgs) -> Vec<(&'static str, String)> {
+    let fractal = args.fractal();
+    let mut list = vec![
+        ("version", env!("CARGO_PKG_VERSION").to_string()),
+        ("combination", args.combo.name()),
+        ("order", args.combo.order().to_string()),
+        ("dimension", args.dim.to_string()),
+        ("seed", args.seed.to_string()),
+        ("metric", format!("{:?}", args.metric)),
+        ("density", args.density.to_string()),
+        ("octaves", fractal.octaves.to_string()),
+        ("lacunarity", fractal.lacunarity.to_string()),
+        ("gain", fractal.gain.to_string()),
+        // The first octave's, in the command's input units.
+        ("frequency", "1".to_string()),
+        ("filtered", args.filtered.to_string()),
+        ("origin", format!("{},{}", args.origin.0, args.origin.1)),
+        ("extent", args.extent.to_string()),
+        ("pixel_step", (args.extent / args.size.0 as f64).to_string()),
+        ("slice", format!("{},{}", args.slice.0, args.slice.1)),
+    ];
+    if let Some(Cells(p)) = &args.period {
+        list.push(("period", p.iter().map(u32::to_string).collect::<Vec<_>>().join(",")));
+    }
+    list
+}
+
+/// The EXR of `args`: every plane's window with the asked channels.
+fn write_exr(args: &RenderArgs, path: &Path) -> Result<(), String> {
+    let window = args.window()?;
+    let channels = match &args.channels {
+        Some(list) => list.0.clone(),
+        None => Channel::defaults(&args.combo, args.shade == ShadeArg::Bump),
+    };
+    if channels.contains(&Channel::Border) && args.metric != Metric::Euclidean {
+        return Err("the border channel needs the Euclidean metric".into());
+    }
+    let planes = with_texture(args, &args.combo, &|bake| bake.planes(&window, &channels))?;
+    let bytes = bake::encode(args.size.0, args.size.1, planes, &settings(args))?;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    picture::write_output(path, &bytes)
 }
 
 /// K random combinations C1F1+…+C4F4, coefficients uniform in [−1, 1]
@@ -264,7 +427,17 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
     let started = std::time::Instant::now();
     // When an image goes to standard output, the messages go to standard
     // error so that the image stays whole.
-    let piped = args.png.as_os_str() == "-" || args.pfm.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    let outputs = [Some(args.png.as_path()), args.pfm.as_deref(), args.exr.as_deref()];
+    let piped = outputs.iter().flatten().filter(|p| p.as_os_str() == "-").count();
+    if piped > 1 {
+        return Err("only one of --png, --pfm and --exr can go to standard output (-)".into());
+    }
+    let piped = piped == 1;
+    if args.random_combos.is_some()
+        && (args.exr.is_some() || args.region.is_some() || args.tile.is_some() || args.depth > 1)
+    {
+        return Err("--random-combos draws a sheet: it takes no --exr, --region, --tile or --depth".into());
+    }
     let say = |line: String| {
         if piped {
             eprintln!("{line}");
@@ -308,12 +481,19 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
         Some(k) => return Err(format!("--random-combos {k}: use 1 to 64")),
     };
     write_outputs(&args.png, args.pfm.as_deref(), &values, &image)?;
+    if let Some(exr) = &args.exr {
+        let spinner = indicatif::ProgressBar::new_spinner().with_message("baking the EXR channels");
+        spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+        write_exr(args, exr)?;
+        spinner.finish_and_clear();
+    }
     say(format!(
-        "wrote {} ({}x{}){} in {:.2} s",
+        "wrote {} ({}x{}){}{} in {:.2} s",
         args.png.display(),
         image.width,
         image.height,
-        args.pfm.as_ref().map(|p| format!(" and {}", p.display())).unwrap_or_default(),
+        args.pfm.as_ref().map(|p| format!(", {}", p.display())).unwrap_or_default(),
+        args.exr.as_ref().map(|p| format!(", {}", p.display())).unwrap_or_default(),
         started.elapsed().as_secs_f64()
     ));
     Ok(())
@@ -325,6 +505,11 @@ pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathB
     let base = RenderArgs {
         png: PathBuf::new(),
         pfm: None,
+        exr: None,
+        channels: None,
+        region: None,
+        tile: None,
+        depth: 1,
         dim: 3,
         combo: Combination::f(1),
         metric: Metric::Euclidean,

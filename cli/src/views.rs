@@ -10,7 +10,7 @@ use crate::picture::{id_colour, ColourMap, Rgb};
 use worley::texture::{bump, Range, Texture};
 use worley::{Grid, Outputs, Simd};
 
-/// A plane of pixels through space.
+/// A plane of pixels through space, or a stack of such planes (a volume).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     /// Image width in pixels.
@@ -24,23 +24,131 @@ pub struct View {
     pub extent: f64,
     /// Coordinates on axes 2 and 3 (where the dimension has them).
     pub slice: [f64; 2],
+    /// Planes along axis 2, one pixel's width apart from `slice[0]` on
+    /// (1: one plane; more only in 3D and 4D).
+    pub depth: usize,
 }
 
 impl View {
     /// The view as a grid of `D`-dimensional points (axis 0 fastest, so the
-    /// grid's order is the image's row-major order).
+    /// grid's order is the image's row-major order, plane after plane).
     pub fn grid<const D: usize>(&self) -> Grid<D> {
         let step = self.extent / self.width.max(1) as f64;
+        let depth = if D > 2 { self.depth } else { 1 };
         Grid {
             origin: std::array::from_fn(|a| if a < 2 { self.origin[a] + 0.5 * step } else { self.slice[a - 2] }),
-            step: std::array::from_fn(|a| if a < 2 { step } else { 0.0 }),
+            step: std::array::from_fn(|a| if a < 2 || (a == 2 && depth > 1) { step } else { 0.0 }),
             size: std::array::from_fn(|a| match a {
                 0 => self.width,
                 1 => self.height,
+                2 => depth,
                 _ => 1,
             }),
         }
     }
+
+    /// Every pixel of the first plane.
+    pub fn whole(&self) -> Window {
+        Window { x: 0, y: 0, width: self.width, height: self.height, plane: 0 }
+    }
+}
+
+/// A rectangle of a view's pixels: columns `x..x + width` and rows
+/// `y..y + height` of plane `plane`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    /// First column.
+    pub x: usize,
+    /// First row, from the top.
+    pub y: usize,
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// The plane along axis 2 (0 for a single image).
+    pub plane: usize,
+}
+
+impl Window {
+    /// Pixels in the window.
+    pub fn len(&self) -> usize {
+        self.width * self.height
+    }
+
+    /// Whether the window has no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The grid row (see [`Grid::rows`]) of the window's row `r`.
+    pub fn grid_row(&self, view: &View, r: usize) -> usize {
+        self.plane * view.height + self.y + r
+    }
+}
+
+/// Fills `out` (the window's pixels, row-major) band by band of rows on all
+/// cores: `fill(r, dst)` gets the band's first row within the window and
+/// its pixels. Bands are 64 rows, as the library's parallel grids take
+/// (each band generates its cells and their margin once), or fewer for a
+/// short window, down to 8, so that every core has four bands.
+pub fn fill_window<T: Send>(window: &Window, out: &mut [T], fill: impl Fn(usize, &mut [T]) + Sync) {
+    let row = window.width.max(1);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let band = window.height.div_ceil(4 * threads).clamp(8, 64);
+    let bands = std::sync::Mutex::new(out.chunks_mut(band * row).enumerate());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let next = bands.lock().map(|mut b| b.next()).unwrap_or(None);
+                let Some((b, dst)) = next else { break };
+                fill(b * band, dst);
+            });
+        }
+    });
+}
+
+/// The window's pixels from whole grid rows: `rows(first, buffer)` fills
+/// whole rows of the view's grid from grid row `first` (the bits its
+/// whole-grid call gives them; the buffer starts as copies of `empty`), and
+/// `pick` turns each pixel of the window's columns into an output.
+pub fn from_rows<U: Copy + Sync, T: Send>(
+    view: &View,
+    window: &Window,
+    out: &mut [T],
+    empty: U,
+    rows: impl Fn(usize, &mut [U]) + Sync,
+    pick: impl Fn(&U) -> T + Sync,
+) {
+    fill_window(window, out, |r, dst| {
+        let band = dst.len() / window.width.max(1);
+        let mut buffer = vec![empty; band * view.width];
+        rows(window.grid_row(view, r), &mut buffer);
+        for (line, full) in dst.chunks_mut(window.width.max(1)).zip(buffer.chunks(view.width.max(1))) {
+            for (o, v) in line.iter_mut().zip(&full[window.x..window.x + window.width]) {
+                *o = pick(v);
+            }
+        }
+    });
+}
+
+/// The window's pixels eight grid points at a time (the last block of a
+/// band repeats its last point).
+pub fn by_eights<const D: usize, T: Copy + Send>(
+    view: &View,
+    window: &Window,
+    out: &mut [T],
+    f: impl Fn(&[[f64; D]; 8]) -> [T; 8] + Sync,
+) {
+    let grid = view.grid::<D>();
+    let row = window.width.max(1);
+    let index = |p: usize| window.grid_row(view, p / row) * view.width + window.x + p % row;
+    fill_window(window, out, |r, dst| {
+        for (c, d8) in dst.chunks_mut(8).enumerate() {
+            let start = r * row + c * 8;
+            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(index(start + i.min(d8.len() - 1))));
+            d8.copy_from_slice(&f(&block)[..d8.len()]);
+        }
+    });
 }
 
 /// How values become colours.
@@ -79,30 +187,44 @@ pub fn render<const D: usize, const N: usize>(
     range: Range,
     filtered: bool,
 ) -> Result<(Vec<f32>, Rgb), String> {
-    let grid = view.grid::<D>();
-    let n = grid.len().filter(|&n| n > 0 && n <= 1 << 28).ok_or("the image must have 1 to 2^28 pixels")?;
-    let footprint = if filtered { grid.step[0] as f32 } else { 0.0 };
-    let mut values = vec![0f32; n];
-    texture.filtered_grid(&grid, footprint, &mut values).map_err(|e| e.to_string())?;
-    let pixels = match shading {
-        Shading::Colour(map) => values.iter().map(|&v| map.colour(range.remap(v))).collect(),
+    render_window(texture, view, &view.whole(), shading, range, filtered)
+}
+
+/// [`render`] for a window of the view: its pixels are the same bits as
+/// those pixels of the whole view, so windows baked apart assemble into
+/// the whole image.
+///
+/// # Errors
+/// An image with no pixels, or one too large to address.
+pub fn render_window<const D: usize, const N: usize>(
+    texture: &Texture<D, N>,
+    view: &View,
+    window: &Window,
+    shading: Shading,
+    range: Range,
+    filtered: bool,
+) -> Result<(Vec<f32>, Rgb), String> {
+    let values = texture_values(texture, view, window, filtered)?;
+    let footprint = footprint(view, filtered);
+    let mut pixels = vec![[0u8; 3]; window.len()];
+    match shading {
+        Shading::Colour(map) => {
+            for (p, &v) in pixels.iter_mut().zip(&values) {
+                *p = map.colour(range.remap(v));
+            }
+        }
         Shading::Bump { strength, map } => {
             let light = glam::Vec3::new(-0.5, -0.6, 0.9).normalize();
-            per_block(&grid, n, |block| {
-                let g = texture.filtered_gradient8(block, [footprint; 8]);
-                let (gx, gy) = (g.gradient[0].to_array(), g.gradient[1].to_array());
-                std::array::from_fn(|i| {
-                    let normal = bump(glam::Vec3::Z, glam::Vec3::new(gx[i], gy[i], 0.0), strength);
-                    let lit = 0.15 + 0.85 * normal.dot(light).max(0.0);
-                    map.colour(lit)
-                })
+            by_eights(view, window, &mut pixels, |block| {
+                normals(texture, block, footprint, strength)
+                    .map(|normal| map.colour(0.15 + 0.85 * normal.dot(light).max(0.0)))
             })
         }
         Shading::Flagstones { mortar } => {
             let config = worley::Config { order: 2, ..*texture.kernel().config() };
             let cells = Simd::<D, 2>::new(config, Outputs::Ids).map_err(|e| e.to_string())?;
             let stain = worley::perlin::Perlin::new(config.seed);
-            per_block(&grid, n, |block| {
+            by_eights(view, window, &mut pixels, |block| {
                 // A periodic texture's flagstones tile with it.
                 let f = match texture.period() {
                     Some(p) => cells.evaluate8_periodic(block, &p),
@@ -127,18 +249,79 @@ pub fn render<const D: usize, const N: usize>(
             })
         }
     };
-    Ok((values, Rgb { width: view.width, height: view.height, pixels }))
+    Ok((values, Rgb { width: window.width, height: window.height, pixels }))
 }
 
-/// Runs `shade` over the grid's points eight at a time, on all cores.
-fn per_block<const D: usize>(
-    grid: &Grid<D>,
-    n: usize,
-    shade: impl Fn(&[[f64; D]; 8]) -> [[u8; 3]; 8] + Sync,
-) -> Vec<[u8; 3]> {
-    let mut pixels = vec![[0u8; 3]; n];
-    grid.fill_by_eights(&mut pixels, shade).expect("the buffer holds one pixel per grid point");
-    pixels
+/// The footprint of a pixel: its width in input units, or 0 (point samples).
+pub fn footprint(view: &View, filtered: bool) -> f32 {
+    if filtered {
+        view.grid::<2>().step[0] as f32
+    } else {
+        0.0
+    }
+}
+
+/// The texture's values at the window's pixels, through whole grid rows
+/// ([`Texture::filtered_grid_rows`]): the bits of [`Texture::filtered_grid`]
+/// over the whole view.
+///
+/// # Errors
+/// A window with no pixels or beyond the view, or a view too large to address.
+pub fn texture_values<const D: usize, const N: usize>(
+    texture: &Texture<D, N>,
+    view: &View,
+    window: &Window,
+    filtered: bool,
+) -> Result<Vec<f32>, String> {
+    check(view, window)?;
+    let grid = view.grid::<D>();
+    let footprint = footprint(view, filtered);
+    let mut values = vec![0f32; window.len()];
+    from_rows(
+        view,
+        window,
+        &mut values,
+        0f32,
+        |first, rows: &mut [f32]| {
+            texture.filtered_grid_rows(&grid, footprint, first, rows).expect("whole rows within the grid")
+        },
+        |&v| v,
+    );
+    Ok(values)
+}
+
+/// The normals of the texture as a height field over the image plane (the
+/// plane's normal bent by `strength` times the gradient), eight points.
+pub fn normals<const D: usize, const N: usize>(
+    texture: &Texture<D, N>,
+    block: &[[f64; D]; 8],
+    footprint: f32,
+    strength: f32,
+) -> [glam::Vec3; 8] {
+    let g = texture.filtered_gradient8(block, [footprint; 8]);
+    let (gx, gy) = (g.gradient[0].to_array(), g.gradient[1].to_array());
+    std::array::from_fn(|i| bump(glam::Vec3::Z, glam::Vec3::new(gx[i], gy[i], 0.0), strength))
+}
+
+/// Checks that the window has pixels and lies within the view.
+///
+/// # Errors
+/// One line saying what is wrong.
+pub fn check(view: &View, window: &Window) -> Result<(), String> {
+    view.grid::<4>().len().filter(|&n| n > 0).ok_or("the image must have pixels, and few enough to address")?;
+    if window.len() > 1 << 28 {
+        return Err("a region of at most 2^28 pixels at a time".into());
+    }
+    let inside = window.x + window.width <= view.width
+        && window.y + window.height <= view.height
+        && window.plane < view.depth.max(1);
+    if window.is_empty() || !inside {
+        return Err(format!(
+            "the region {}x{} at ({}, {}) of plane {} is empty or outside the {}x{} image of {} plane(s)",
+            window.width, window.height, window.x, window.y, window.plane, view.width, view.height, view.depth
+        ));
+    }
+    Ok(())
 }
 
 /// F2 − F1 beside twice the distance to the cell's border, on the same

@@ -231,8 +231,16 @@ fn random_combinations_print_their_coefficients() {
 
 #[test]
 fn bad_options_get_one_line_and_exit_code_2() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 15] = [
         (&["render", "--bogus"], "unexpected argument"),
+        (&["render", "--size", "8x8", "--region", "4,4,5,2", "--png", "-"], "outside the 8x8 image"),
+        (&["render", "--region", "1,2,0,3"], "X,Y,W,H"),
+        (&["render", "--tile", "3/3"], "0 <= I < N"),
+        (&["render", "--tile", "0/0"], "0 <= I < N"),
+        (&["render", "--size", "8x4", "--tile", "0/5", "--png", "-"], "at most the image's height (4)"),
+        (&["render", "--exr", "-", "--channels", "F1,colour"], "unknown channel \"colour\""),
+        (&["render", "--depth", "2", "--dim", "2", "--png", "-"], "need --dim 3 or 4"),
+        (&["stitch", "--out", "-", "/nonexistent/a.exr"], "cannot read /nonexistent/a.exr"),
         (&["render", "--size", "0x4"], "WIDTHxHEIGHT"),
         (&["render", "--shade", "shiny"], "possible values"),
         (&["render", "--combo", "F2+G1"], "F1*F2"),
@@ -313,5 +321,223 @@ fn outputs_follow_symlinks_and_write_special_files_directly() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.starts_with("worley: cannot write") && err.lines().count() == 1, "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An EXR file's channels: (layer name, channel name) to the layer's data
+/// window (position, size) and samples.
+type Channels = std::collections::BTreeMap<(Option<String>, String), ([i32; 2], [usize; 2], exr::prelude::FlatSamples)>;
+
+fn read_exr(path: &Path) -> (exr::prelude::IntegerBounds, Channels, Vec<exr::prelude::LayerAttributes>) {
+    use exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .expect("an EXR the exr crate reads");
+    let mut channels = Channels::new();
+    let mut attributes = Vec::new();
+    for layer in image.layer_data {
+        let name = layer.attributes.layer_name.as_ref().map(|n| n.to_string());
+        let (pos, size) = (layer.attributes.layer_position, layer.size);
+        for c in layer.channel_data.list {
+            channels.insert((name.clone(), c.name.to_string()), ([pos.0, pos.1], [size.0, size.1], c.sample_data));
+        }
+        attributes.push(layer.attributes);
+    }
+    (image.attributes.display_window, channels, attributes)
+}
+
+fn f32s(s: &exr::prelude::FlatSamples) -> &[f32] {
+    match s {
+        exr::prelude::FlatSamples::F32(v) => v,
+        _ => panic!("a float channel"),
+    }
+}
+
+/// Every channel of a 3D bake of two planes, read back with the exr crate,
+/// is the library's value at the pixel's point, bit for bit: the texture
+/// (filtered, three octaves), F1, F2, F2 − F1, F1's ID (as u32) and delta,
+/// the border and the bump normal; the header holds the configuration.
+#[test]
+fn an_exr_bake_holds_the_librarys_values_in_every_channel() {
+    let dir = scratch("exr");
+    let exr = dir.join("bake.exr");
+    let (w, h, extent, origin, z) = (23usize, 13usize, 3.0, [0.5, -1.0], 0.25);
+    let out = worley(&[
+        "render",
+        "--dim",
+        "3",
+        "--combo",
+        "F2-F1",
+        "--size",
+        "23x13",
+        "--extent",
+        "3",
+        "--origin",
+        "0.5,-1",
+        "--slice",
+        "0.25",
+        "--seed",
+        "11",
+        "--octaves",
+        "3",
+        "--filtered",
+        "--shade",
+        "bump",
+        "--depth",
+        "2",
+        "--channels",
+        "all",
+        "--png",
+        dir.join("bake.png").to_str().unwrap(),
+        "--exr",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (display, channels, attributes) = read_exr(&exr);
+    assert_eq!((display.size.0, display.size.1), (w, h));
+    let names: Vec<&str> = channels.keys().filter(|k| k.0.as_deref() == Some("z0001")).map(|k| k.1.as_str()).collect();
+    let want = [
+        "F1", "F2", "F2-F1", "border", "delta.X", "delta.Y", "delta.Z", "id", "normal.X", "normal.Y", "normal.Z",
+        "value",
+    ];
+    assert_eq!(names, want);
+    // One attribute with the settings, the same in every plane but for z.
+    let settings = |a: &exr::prelude::LayerAttributes| match a.other.get(&exr::prelude::Text::from("worley")) {
+        Some(exr::prelude::AttributeValue::Text(t)) => t.to_string(),
+        other => panic!("the worley attribute is text: {other:?}"),
+    };
+    assert_eq!(attributes.len(), 2);
+    let first = settings(&attributes[0]);
+    let combination = format!("; combination={}; ", Combination::crackle().name());
+    for want in ["; seed=11; ", &combination, "; octaves=3; ", "; filtered=true; ", "; slice=0.25,0.25; ", "; z=0.25"] {
+        assert!(first.contains(want), "{first:?} should hold {want:?}");
+    }
+    let z1 = format!("; z={}", z + extent / w as f64);
+    assert!(settings(&attributes[1]).ends_with(&z1), "{}", settings(&attributes[1]));
+
+    let config = Config { seed: 11, ..Config::default() };
+    let texture = Texture::<3, 2>::new(config, Combination::crackle(), Fractal::octaves(3), None).unwrap();
+    let basis = worley::Simd::<3, 2>::new(Config { order: 2, ..config }, worley::Outputs::IdsAndDeltas).unwrap();
+    let border = SimdBorder::<3>::new(config).unwrap();
+    let step = extent / w as f64;
+    for plane in 0..2usize {
+        let layer = Some(format!("z{plane:04}"));
+        let get = |name: &str| &channels[&(layer.clone(), name.to_string())].2;
+        let ids = match get("id") {
+            exr::prelude::FlatSamples::U32(v) => v.clone(),
+            _ => panic!("the ID is a u32 channel"),
+        };
+        for j in 0..h {
+            for i in 0..w {
+                let [x, y] = pixel(origin, extent, w, i, j);
+                let p = [x, y, z + step * plane as f64];
+                let k = j * w + i;
+                let bits = |name: &str| f32s(get(name))[k].to_bits();
+                assert_eq!(bits("value"), texture.filtered(p, step as f32).to_bits(), "value at {p:?}");
+                let f = basis.evaluate(p);
+                assert_eq!(bits("F1"), f.distance[0].to_bits());
+                assert_eq!(bits("F2"), f.distance[1].to_bits());
+                assert_eq!(bits("F2-F1"), (f.distance[1] - f.distance[0]).to_bits());
+                assert_eq!(ids[k], f.id[0]);
+                for (a, axis) in ["X", "Y", "Z"].iter().enumerate() {
+                    assert_eq!(bits(&format!("delta.{axis}")), f.delta[0][a].to_bits());
+                }
+                assert_eq!(bits("border"), border.border(p).distance.to_bits());
+                let g = texture.filtered_gradient8(&[p; 8], [step as f32; 8]);
+                let gradient = glam::Vec3::new(g.gradient[0].to_array()[0], g.gradient[1].to_array()[0], 0.0);
+                let normal = worley::texture::bump(glam::Vec3::Z, gradient, 0.6);
+                assert_eq!(bits("normal.Z"), normal.z.to_bits(), "normal at {p:?}");
+                assert_eq!(bits("normal.X"), normal.x.to_bits());
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Bands of `--tile` and windows of `--region`, baked by separate runs and
+/// stitched, are the whole image's EXR bit for bit (a periodic 2D texture,
+/// whose channels take eight points at a time, and a 3D fractal whose value
+/// and basis take whole grid rows, beside the border); stitch refuses
+/// overlapping and missing windows.
+#[test]
+fn tiles_and_regions_stitch_into_the_whole_exr() {
+    let dir = scratch("stitch");
+    let cases: [&[&str]; 2] = [
+        &["--dim", "2", "--period", "5", "--extent", "5", "--combo", "F1", "--channels", "value,F1,F2,id,delta"],
+        &[
+            "--dim",
+            "3",
+            "--combo",
+            "F2-F1",
+            "--octaves",
+            "3",
+            "--extent",
+            "4",
+            "--origin=-3.5,7",
+            "--channels",
+            "value,F2-F1,border,id",
+        ],
+    ];
+    for (c, case) in cases.iter().enumerate() {
+        let run = |name: &str, window: &[&str]| {
+            let path = dir.join(format!("{c}-{name}.exr"));
+            let mut args = vec!["render", "--size", "41x19", "--range", "0,1", "--png", "-", "--exr"];
+            let path_str = path.to_str().unwrap().to_string();
+            args.push(&path_str);
+            args.extend_from_slice(case);
+            args.extend_from_slice(window);
+            let out = worley(&args);
+            assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+            path
+        };
+        let whole = run("whole", &[]);
+        let tiles: Vec<PathBuf> = (0..3).map(|i| run(&format!("tile{i}"), &["--tile", &format!("{i}/3")])).collect();
+        let regions = [
+            run("left", &["--region", "0,0,17,19"]),
+            run("top-right", &["--region", "17,0,24,6"]),
+            run("bottom-right", &["--region", "17,6,24,13"]),
+        ];
+        let (_, want, _) = read_exr(&whole);
+        for (label, parts) in [("tiles", &tiles[..]), ("regions", &regions[..])] {
+            let stitched = dir.join(format!("{c}-{label}.exr"));
+            let mut args = vec!["stitch".to_string(), "--out".into(), stitched.display().to_string()];
+            args.extend(parts.iter().rev().map(|p| p.display().to_string()));
+            let out = Command::new(env!("CARGO_BIN_EXE_worley")).args(&args).output().unwrap();
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            // The same settings give the same bytes: the stitched file is
+            // the whole image's file.
+            assert!(std::fs::read(&stitched).unwrap() == std::fs::read(&whole).unwrap(), "case {c}, {label}");
+            let (display, got, _) = read_exr(&stitched);
+            assert_eq!((display.size.0, display.size.1), (41, 19));
+            assert_eq!(got.keys().collect::<Vec<_>>(), want.keys().collect::<Vec<_>>(), "{label}");
+            for (key, (_, size, samples)) in &got {
+                assert_eq!(*size, [41, 19]);
+                let same = match (samples, &want[key].2) {
+                    (exr::prelude::FlatSamples::F32(a), exr::prelude::FlatSamples::F32(b)) => {
+                        a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+                    }
+                    (a, b) => a == b,
+                };
+                assert!(same, "case {c}, {label}: channel {key:?} differs from the whole image's");
+            }
+        }
+        // A band twice, or one left out: refused with the reason.
+        let stitch = |files: &[&PathBuf]| {
+            let mut args = vec!["stitch".to_string(), "--out".into(), dir.join("bad.exr").display().to_string()];
+            args.extend(files.iter().map(|p| p.display().to_string()));
+            Command::new(env!("CARGO_BIN_EXE_worley")).args(&args).output().unwrap()
+        };
+        let twice = stitch(&[&tiles[0], &tiles[1], &tiles[1], &tiles[2]]);
+        assert_eq!(twice.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&twice.stderr).contains("overlaps"));
+        let missing = stitch(&[&tiles[0], &tiles[2]]);
+        assert!(String::from_utf8_lossy(&missing.stderr).contains("pixels are in none of the files"));
+        assert!(!dir.join("bad.exr").exists());
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

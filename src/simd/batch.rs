@@ -259,6 +259,45 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         Ok(())
     }
 
+    /// Rows `first..` of a grid, as many whole rows as `out` holds ([`Grid::rows`]
+    /// says how rows are counted): the bits [`Simd::evaluate_grid`] writes
+    /// for those rows, through the same path, on the calling thread. A bake
+    /// split into bands of rows, on cores or on machines, assembles into the
+    /// whole grid's results bit for bit; a sub-grid with a shifted origin
+    /// would not, since `origin + step · i` rounds differently from
+    /// `(origin + step · first) + step · (i − first)`.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out` is not whole rows or runs past the grid's
+    /// last row; nothing is written.
+    ///
+    /// ```
+    /// use worley::{Config, Grid, Outputs, Simd};
+    /// let basis = Simd::<2, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    /// let image = Grid { origin: [0.1, -2.0], step: [0.03, 0.03], size: [40, 30] };
+    /// let mut whole = vec![basis.evaluate([0.0; 2]); 40 * 30];
+    /// basis.evaluate_grid(&image, &mut whole).unwrap();
+    /// // Rows 7..19 alone, as a farm's second job would bake them.
+    /// let mut band = vec![basis.evaluate([0.0; 2]); 40 * 12];
+    /// basis.evaluate_grid_rows(&image, 7, &mut band).unwrap();
+    /// assert_eq!(band[..], whole[40 * 7..40 * 19]);
+    /// assert!(basis.evaluate_grid_rows(&image, 25, &mut band).is_err());
+    /// ```
+    pub fn evaluate_grid_rows(
+        &self,
+        grid: &Grid<D>,
+        first: usize,
+        out: &mut [Features32<D, N>],
+    ) -> Result<(), SizeError> {
+        grid.check_rows(first, out.len())?;
+        let rows = self.grid_rows(grid);
+        let width = grid.size[0].max(1);
+        for (b, dst) in out.chunks_mut(super::SERIAL_BAND * width).enumerate() {
+            self.grid_rows_into(&rows, first + b * super::SERIAL_BAND, dst);
+        }
+        Ok(())
+    }
+
     /// [`Simd::evaluate_grid`] on all cores (rayon), in tiles of [`TILE`]
     /// points; the results are identical to the serial call's.
     ///

@@ -171,14 +171,20 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         GridRows { grid, axes: self.grid_axes(grid) }
     }
 
-    /// The distances of rows `first..` of the grid into `out` (whole rows),
-    /// the bits [`Simd::evaluate_grid_distances`] writes for them.
-    pub(crate) fn grid_rows_distances(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [[f32; N]]) {
+    /// Rows `first..` of the grid into `out` (whole rows, one band), the
+    /// bits [`Simd::evaluate_grid`] or [`Simd::evaluate_grid_distances`]
+    /// writes for them.
+    pub(super) fn grid_rows_into<T: GridSample<D, N>>(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [T]) {
         match &rows.axes {
             _ if out.is_empty() => {}
             Some(axes) => self.band(rows.grid, axes, first, out),
-            None => GridSample::per_sample(self, rows.grid, first * rows.grid.size[0], out),
+            None => T::per_sample(self, rows.grid, first * rows.grid.size[0], out),
         }
+    }
+
+    /// [`Simd::grid_rows_into`] for the distances alone (a texture's octaves).
+    pub(crate) fn grid_rows_distances(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [[f32; N]]) {
+        self.grid_rows_into(rows, first, out)
     }
 
     /// Rows `first..` of the grid into `out` (whole rows).

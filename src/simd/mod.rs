@@ -158,7 +158,6 @@ pub use border::{Border32, Border8, SimdBorder};
 pub(crate) use coherent::GridRows;
 #[cfg(feature = "parallel")]
 pub(crate) use coherent::BAND;
-#[cfg(not(feature = "parallel"))]
 pub(crate) use coherent::SERIAL_BAND;
 pub use features::{lane, Features32, Features8};
 pub use level::{runtime_avx2, runtime_avx512, set_simd_cap, simd_cap, simd_level, SimdCap};

@@ -210,6 +210,28 @@ impl<const D: usize> Grid<D> {
         Ok(())
     }
 
+    /// The number of rows: lines of points along axis 0, counted over axis
+    /// 1 fastest, then axis 2 and 3 (the image rows of a 2D grid, the rows
+    /// of every slab in turn of a 3D one). `None` if it overflows `usize`.
+    pub fn rows(&self) -> Option<usize> {
+        self.size[1..].iter().try_fold(1usize, |n, &s| n.checked_mul(s))
+    }
+
+    /// Checks that `given` results are whole rows `first..` of the grid
+    /// (none when the grid has no points); the error's `needed` is the
+    /// longest whole-row length that would fit.
+    pub(crate) fn check_rows(&self, first: usize, given: usize) -> Result<(), SizeError> {
+        let width = self.size[0];
+        let rows = self.rows().ok_or(SizeError { needed: usize::MAX, given })?;
+        let left = rows.saturating_sub(first);
+        let fits = given.checked_div(width).map_or(0, |rows| rows.min(left));
+        let needed = fits.checked_mul(width).ok_or(SizeError { needed: usize::MAX, given })?;
+        if needed != given {
+            return Err(SizeError { needed, given });
+        }
+        Ok(())
+    }
+
     /// The position of the point with linear index `index` (axis 0 fastest).
     pub fn point(&self, mut index: usize) -> [f64; D] {
         std::array::from_fn(|a| {

@@ -117,18 +117,74 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     /// assert_eq!(image[16 + 3], t.filtered(grid.point(16 + 3), 0.5));
     /// ```
     pub fn filtered_grid(&self, grid: &crate::Grid<D>, width: f32, out: &mut [f32]) -> Result<(), crate::SizeError> {
-        let alpha: Vec<f32> = self.octaves.iter().map(|&(f, _, _)| self.weights(&[width; 8], f)[0]).collect();
-        let Some(octaves) = self.octave_grids(grid, &alpha) else {
-            return grid.fill_by_eights(out, |block| self.filtered8(block, [width; 8]).to_array());
-        };
         let needed = grid.len().ok_or(crate::SizeError { needed: usize::MAX, given: out.len() })?;
         if out.len() != needed {
             return Err(crate::SizeError { needed, given: out.len() });
         }
-        let width = grid.size[0];
-        if needed == 0 {
-            return Ok(());
+        self.grid_rows_with(grid, width, 0, out, true);
+        Ok(())
+    }
+
+    /// Rows `first..` of a grid, as many whole rows as `out` holds
+    /// ([`Grid::rows`](crate::Grid::rows) says how rows are counted): the
+    /// bits [`Texture::filtered_grid`] writes for those rows, through the
+    /// same path, on the calling thread. Bands baked apart (on other cores
+    /// or machines) assemble into the whole grid bit for bit, as with
+    /// [`Simd::evaluate_grid_rows`](crate::Simd::evaluate_grid_rows).
+    ///
+    /// # Errors
+    /// [`crate::SizeError`] if `out` is not whole rows or runs past the
+    /// grid's last row; nothing is written.
+    ///
+    /// ```
+    /// use worley::texture::{Combination, Fractal, Texture};
+    /// use worley::Grid;
+    /// let t = Texture::<3, 2>::new(worley::Config::default(), Combination::crackle(), Fractal::octaves(3), None).unwrap();
+    /// let grid = Grid { origin: [0.3, 0.1, 0.5], step: [0.07, 0.07, 1.0], size: [24, 20, 1] };
+    /// let mut whole = vec![0.0; 24 * 20];
+    /// t.filtered_grid(&grid, 0.07, &mut whole).unwrap();
+    /// let mut band = vec![0.0; 24 * 5];
+    /// t.filtered_grid_rows(&grid, 0.07, 11, &mut band).unwrap();
+    /// assert_eq!(band[..], whole[24 * 11..24 * 16]);
+    /// ```
+    pub fn filtered_grid_rows(
+        &self,
+        grid: &crate::Grid<D>,
+        width: f32,
+        first: usize,
+        out: &mut [f32],
+    ) -> Result<(), crate::SizeError> {
+        grid.check_rows(first, out.len())?;
+        self.grid_rows_with(grid, width, first, out, false);
+        Ok(())
+    }
+
+    /// Rows `first..` of the grid into `out` (whole rows, checked by the
+    /// caller), on all cores with `parallel` and the `parallel` feature.
+    fn grid_rows_with(&self, grid: &crate::Grid<D>, width: f32, first: usize, out: &mut [f32], parallel: bool) {
+        let row = grid.size[0];
+        if out.is_empty() || row == 0 {
+            return;
         }
+        let alpha: Vec<f32> = self.octaves.iter().map(|&(f, _, _)| self.weights(&[width; 8], f)[0]).collect();
+        let Some(octaves) = self.octave_grids(grid, &alpha) else {
+            // Eight points at a time, each at its own grid index.
+            let each = |start: usize, dst: &mut [f32]| {
+                for (c, d8) in dst.chunks_mut(8).enumerate() {
+                    let at = first * row + start + c * 8;
+                    let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(at + i.min(d8.len() - 1)));
+                    d8.copy_from_slice(&self.filtered8(&block, [width; 8]).to_array()[..d8.len()]);
+                }
+            };
+            #[cfg(feature = "parallel")]
+            if parallel {
+                let tile = crate::simd::TILE;
+                crate::parallel::for_each_chunk(out, tile, &|t, dst| each(t * tile, dst));
+                return;
+            }
+            let _ = parallel;
+            return each(0, out);
+        };
         let mean = if alpha.iter().all(|&a| a == 1.0) { f32::NAN } else { self.blend_curve().mean() };
         // Only the octaves the footprint resolves are evaluated.
         let rows: Vec<Option<GridRows<'_, D>>> =
@@ -158,16 +214,13 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             }
         };
         #[cfg(feature = "parallel")]
-        {
+        if parallel {
             let rows = crate::simd::BAND;
-            crate::parallel::for_each_chunk(out, rows * width, &|b, dst| band(b * rows, dst));
+            crate::parallel::for_each_chunk(out, rows * row, &|b, dst| band(first + b * rows, dst));
+            return;
         }
-        #[cfg(not(feature = "parallel"))]
-        {
-            let rows = crate::simd::SERIAL_BAND;
-            out.chunks_mut(rows * width).enumerate().for_each(|(b, dst)| band(b * rows, dst));
-        }
-        Ok(())
+        let rows = crate::simd::SERIAL_BAND;
+        out.chunks_mut(rows * row).enumerate().for_each(|(b, dst)| band(first + b * rows, dst));
     }
 
     /// Octave i of `grid` as a grid of its own (origin and step times the

@@ -85,6 +85,49 @@ fn the_parallel_grid_is_the_serial_grid() {
 }
 
 #[test]
+fn bands_of_rows_assemble_into_the_whole_grid() {
+    let simd = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
+    let empty = Features32 { distance: [0.0; 2], delta: [[0.0; 3]; 2], id: [0; 2] };
+    let grids = [
+        // Coherent, rows across three slabs, more rows than a serial band.
+        Grid { origin: [-7.3, 2.2, 0.4], step: [0.05, 0.07, 0.3], size: [61, 97, 3] },
+        // Samples a cell apart: the per-sample path.
+        Grid { origin: [3.1, -1.0, 0.2], step: [2.5, 1.5, 1.0], size: [13, 40, 2] },
+        // A bad row: NaN where the kernel gives it.
+        Grid { origin: [0.0, 1.0e300, 0.0], step: [0.01, -2.0e299, 0.0], size: [9, 12, 1] },
+    ];
+    for grid in &grids {
+        let n = grid.len().unwrap();
+        let mut whole = vec![empty; n];
+        simd.evaluate_grid(grid, &mut whole).unwrap();
+        let (row, rows) = (grid.size[0], grid.rows().unwrap());
+        for (i, o) in whole.iter().enumerate().step_by(31) {
+            assert!(same_bits(o, &simd.evaluate(grid.point(i))), "sample {i}");
+        }
+        let mut first = 0;
+        for band in [1, 130, 3, 17, 60].into_iter().cycle() {
+            let band = band.min(rows - first);
+            let mut out = vec![empty; band * row];
+            simd.evaluate_grid_rows(grid, first, &mut out).unwrap();
+            let want = &whole[first * row..(first + band) * row];
+            assert!(out.iter().zip(want).all(|(a, b)| same_bits(a, b)), "{grid:?} rows {first}..+{band}");
+            first += band;
+            if first == rows {
+                break;
+            }
+        }
+        // Not whole rows, or past the last row: an error, nothing written.
+        let mut odd = vec![empty; row + 1];
+        let err = simd.evaluate_grid_rows(grid, 0, &mut odd).unwrap_err();
+        assert_eq!((err.needed, err.given), (row, row + 1));
+        let mut two = vec![empty; 2 * row];
+        let err = simd.evaluate_grid_rows(grid, rows - 1, &mut two).unwrap_err();
+        assert_eq!(err.needed, row);
+        assert!(two.iter().all(|o| o.distance == [0.0; 2]));
+    }
+}
+
+#[test]
 fn grids_with_bad_coordinates_take_the_per_sample_path() {
     let simd = Simd::<2, 1>::new(Config::default(), Outputs::Ids).unwrap();
     let empty = Features32 { distance: [0.0; 1], delta: [[0.0; 2]; 1], id: [0; 1] };

@@ -165,7 +165,7 @@ fn cost_falls_with_the_footprint_and_bad_input_stays_nan() {
 }
 
 #[test]
-fn filtered_grids_and_slices_give_each_points_filtered_value() {
+fn filtered_grids_their_bands_and_slices_give_each_points_filtered_value() {
     fn check<const D: usize, const N: usize>(t: &Texture<D, N>, grid: &Grid<D>) {
         for width in [0.0f32, 0.07, 0.4, 3.0, 1e4] {
             let mut image = vec![0.0; grid.len().unwrap()];
@@ -174,6 +174,24 @@ fn filtered_grids_and_slices_give_each_points_filtered_value() {
                 let want = t.filtered(grid.point(i), width);
                 assert_eq!(v.to_bits(), want.to_bits(), "width {width}, sample {i}");
             }
+            // Bands of rows baked apart assemble into the whole grid.
+            let row = grid.size[0];
+            let mut first = 0;
+            for rows in [1, 5, 2, 7].into_iter().cycle() {
+                let rows = rows.min(grid.rows().unwrap() - first);
+                let mut band = vec![f32::NAN; rows * row];
+                t.filtered_grid_rows(grid, width, first, &mut band).unwrap();
+                let whole = &image[first * row..(first + rows) * row];
+                assert!(band.iter().zip(whole).all(|(a, b)| a.to_bits() == b.to_bits()), "rows {first}.., {width}");
+                first += rows;
+                if first == grid.rows().unwrap() {
+                    break;
+                }
+            }
+            let mut short = vec![0.0; row + 1];
+            assert!(t.filtered_grid_rows(grid, width, 0, &mut short).is_err());
+            let mut last = vec![0.0; 2 * row];
+            assert!(t.filtered_grid_rows(grid, width, grid.rows().unwrap() - 1, &mut last).is_err());
         }
     }
     let grid = Grid { origin: [0.3, -7.1], step: [0.05, 0.0625], size: [29, 17] };
