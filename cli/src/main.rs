@@ -60,6 +60,9 @@ struct GalleryArgs {
     /// Pixels per tile (figures of several tiles are larger).
     #[arg(long, default_value_t = 384, value_parser = clap::value_parser!(u32).range(16..=4096))]
     tile: u32,
+    /// Also write each figure's raw values as an EXR beside its PNG.
+    #[arg(long)]
+    exr: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -171,13 +174,12 @@ fn main() -> ExitCode {
                 println!("{line}");
             }
         }),
-        Some(Command::Gallery(args)) => {
-            worley_cli::render_cmd::gallery(&args.out, args.tile as usize, true).map(|written| {
+        Some(Command::Gallery(args)) => worley_cli::render_cmd::gallery(&args.out, args.tile as usize, true, args.exr)
+            .map(|written| {
                 for path in written {
                     println!("{}", path.display());
                 }
-            })
-        }
+            }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -382,7 +384,7 @@ fn main_job() -> Result<(), String> {
 
     let drawn = std::time::Instant::now();
     bar.set_message("gallery");
-    let images = worley_cli::render_cmd::gallery(Path::new("out/gallery"), 384, false)?;
+    let images = worley_cli::render_cmd::gallery(Path::new("out/gallery"), 384, false, false)?;
     bar.inc(1);
     bar.finish_and_clear();
     say!("\ngallery ({} images, {:.1} s on all cores):", images.len(), drawn.elapsed().as_secs_f64());

@@ -499,9 +499,10 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// The gallery: the chapter's figures and textures, into `dir`. Returns the
-/// files written.
-pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathBuf>, String> {
+/// The gallery: the chapter's figures and textures, into `dir`, each also
+/// as an EXR of its raw values (one `value` channel, NaN in the gaps between
+/// tiles) with `exr`. Returns the files written.
+pub fn gallery(dir: &Path, tile: usize, show_progress: bool, exr: bool) -> Result<Vec<PathBuf>, String> {
     let base = RenderArgs {
         png: PathBuf::new(),
         pfm: None,
@@ -617,10 +618,23 @@ pub fn gallery(dir: &Path, tile: usize, show_progress: bool) -> Result<Vec<PathB
     };
     let mut written = Vec::new();
     for (name, make) in &figures {
-        let (_, image) = make()?;
+        let (values, image) = make()?;
         let path = dir.join(name);
         picture::write_output(&path, &image.to_png()?)?;
-        written.push(path);
+        written.push(path.clone());
+        if exr {
+            let path = path.with_extension("exr");
+            let window = Window { x: 0, y: 0, width: image.width, height: image.height, plane: 0 };
+            let plane = bake::Plane {
+                name: None,
+                z: None,
+                window,
+                channels: vec![("value".into(), bake::Samples::F32(values))],
+            };
+            let settings = [("version", env!("CARGO_PKG_VERSION").to_string()), ("figure", name.to_string())];
+            picture::write_output(&path, &bake::encode(image.width, image.height, vec![plane], &settings)?)?;
+            written.push(path);
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();

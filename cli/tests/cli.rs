@@ -541,3 +541,28 @@ fn tiles_and_regions_stitch_into_the_whole_exr() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `worley gallery --exr` writes each figure's raw values beside its PNG:
+/// the first tile of Figure 4.2 is the library's F1 at each pixel, and the
+/// gaps between tiles are NaN.
+#[test]
+fn the_gallery_writes_its_float_maps_as_exr() {
+    let dir = scratch("gallery");
+    let out = worley(&["gallery", "--out", dir.to_str().unwrap(), "--tile", "16", "--exr"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let listed = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(listed.lines().filter(|l| l.ends_with(".exr")).count(), 7, "{listed}");
+    let (display, channels, _) = read_exr(&dir.join("fig4_2_f1_f2_f3_crackle.exr"));
+    assert_eq!((display.size.0, display.size.1), (34, 34));
+    assert_eq!(png_size(&dir.join("fig4_2_f1_f2_f3_crackle.png")), (34, 34));
+    let values = f32s(&channels[&(None, "value".to_string())].2);
+    let f1 = Texture::<3, 1>::new(Config::default(), Combination::f(1), Fractal::default(), None).unwrap();
+    for j in 0..16 {
+        for i in 0..16 {
+            let [x, y] = pixel([0.0, 0.0], 8.0, 16, i, j);
+            assert_eq!(values[j * 34 + i].to_bits(), f1.value([x, y, 0.5]).to_bits(), "pixel {i}, {j}");
+        }
+        assert!(values[j * 34 + 16].is_nan() && values[j * 34 + 17].is_nan());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
