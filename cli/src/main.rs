@@ -285,13 +285,20 @@ fn main_job() -> Result<(), String> {
         versus.pairs
     );
     say!("speed through the harness, which converts every result to its f64 report (see `cargo bench` for the kernels alone)");
+    // Where this build chooses AVX-512 at run time, the same samples again
+    // under a ceiling of AVX2: the level most CPUs run.
+    let avx2_too = worley::simd::runtime_avx512();
+    if avx2_too {
+        say!("AVX2 M/s: the SIMD speed again under WORLEY_SIMD=avx2 (what a CPU without AVX-512 runs)");
+    }
     say!(
-        "{:>4} {:>5} | {:>9} {:>9} {:>6} | {:>10} {:>10} {:>6} {:>6}",
+        "{:>4} {:>5} | {:>9} {:>9} {:>6}{} | {:>10} {:>10} {:>6} {:>6}",
         "dim",
         "order",
         "ref M/s",
         "SIMD M/s",
         "ratio",
+        if avx2_too { format!(" {:>9}", "AVX2 M/s") } else { String::new() },
         "ref maxerr",
         "SIMD maxerr",
         "wrong",
@@ -305,13 +312,23 @@ fn main_job() -> Result<(), String> {
             let max_err = |rep: &Report| rep.orders.iter().map(|o| o.max_error).fold(0.0, f64::max);
             let wrong: u64 = v.orders.iter().map(|o| o.oracle_disagreements + o.id_disagreements).sum();
             let disc: u64 = v.orders.iter().map(|o| o.continuity_violations).sum();
+            let avx2 = if avx2_too {
+                let speed_only = Campaign { oracle_samples: 0, pairs: 0, ..versus };
+                let before = worley::simd::set_simd_cap(worley::simd::SimdCap::Avx2);
+                let a = run_simd(dim, config, &speed_only);
+                worley::simd::set_simd_cap(before);
+                format!(" {:>9.3}", a?.throughput / 1e6)
+            } else {
+                String::new()
+            };
             say!(
-                "{:>4} {:>5} | {:>9.3} {:>9.3} {:>6.2} | {:>10.2e} {:>10.2e} {:>6} {:>6}",
+                "{:>4} {:>5} | {:>9.3} {:>9.3} {:>6.2}{} | {:>10.2e} {:>10.2e} {:>6} {:>6}",
                 format!("{dim}D"),
                 format!("F1-F{order}"),
                 r.throughput / 1e6,
                 v.throughput / 1e6,
                 v.throughput / r.throughput,
+                avx2,
                 max_err(&r),
                 max_err(&v),
                 wrong,

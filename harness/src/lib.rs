@@ -89,7 +89,10 @@ impl<const D: usize> Kernel<D> for Reference<D> {
 
 impl<const D: usize, const N: usize> Kernel<D> for worley::simd::Simd<D, N> {
     fn name(&self) -> String {
-        format!("simd-f32x{}", self.slice_lanes())
+        // The lanes of a slice, and the SIMD level in force (its first
+        // word: avx512f, avx2, sse4.1, sse2), so that every report names it.
+        let level = worley::simd_level().split(' ').next().unwrap_or("");
+        format!("simd-f32x{} {level}", self.slice_lanes())
     }
     fn config(&self) -> &Config {
         worley::simd::Simd::config(self)

@@ -69,6 +69,7 @@ struct Avx512;
 // slices already cut to sixteen elements, so the pointers are in bounds.
 impl Lanes for Avx512 {
     const N: usize = 16;
+    const LOCAL_RANKS: usize = 2;
     type F = __m512;
     type U = __m512i;
     type M = __mmask16;

@@ -24,6 +24,12 @@ pub const WIDEST: usize = 16;
 pub trait Lanes: Copy + 'static {
     /// Number of lanes.
     const N: usize;
+    /// How many ranks of lanes a tile may keep in registers through its
+    /// candidates (at most half the register file): two of sixteen lanes
+    /// in AVX-512's 32 registers, one otherwise (eight lanes, or sixteen
+    /// as two AVX2 halves in its 16 registers, where two ranks measured
+    /// 0.89x of one on grid F2).
+    const LOCAL_RANKS: usize = 1;
     /// f32 lanes.
     type F: Copy;
     /// u32 lanes.
@@ -329,6 +335,7 @@ macro_rules! wide_lanes {
     ($name:ident, $n:literal, $f:ident, $u:ident, $i:ident, $from:ident $(, $broadcast:ident)?) => {
         impl Lanes for $name {
             const N: usize = $n;
+            const LOCAL_RANKS: usize = if $n >= 16 && cfg!(target_feature = "avx512f") { 2 } else { 1 };
             type F = $f;
             type U = $u;
             type M = $f;

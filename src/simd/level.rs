@@ -105,7 +105,7 @@ pub fn simd_level() -> &'static str {
     } else if runtime_avx512() {
         "avx512f at run time (a build without it: Euclidean slices and grid tiles run 16 AVX-512 lanes chosen because the CPU has them; Euclidean 8-lane calls run their AVX2 copy)"
     } else if cfg!(target_feature = "avx2") {
-        "avx2"
+        "avx2 (Euclidean grid tiles in 16 lanes as two 256-bit halves)"
     } else if runtime_avx2() {
         "avx2 at run time (an sse2 build: its Euclidean 8-lane kernels are recompiled for AVX2 and chosen because the CPU has it)"
     } else if cfg!(target_feature = "sse4.1") {

@@ -132,6 +132,11 @@
 //! `avx512` keeps the measurements and its safety argument. It is the
 //! other fenced `unsafe` operation, and unit tests hold it to the one-lane
 //! rule per operation and to the eight- and one-lane bits per slice.
+//!
+//! A build for AVX2 without AVX-512 (`-C target-cpu=x86-64-v3`, or `native`
+//! on such a CPU) runs the Euclidean grid tiles in sixteen lanes as two
+//! AVX2 halves (1.2-1.3× its eight lanes on 3D grids, docs/simd.md); a build
+//! without target flags keeps eight lanes in its run-time AVX2 copy.
 
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
 mod avx512;

@@ -39,9 +39,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         (rows, near): (&[CellRow<L, D>], &[f32]),
         best: &mut [Best<L, D, N>; K],
     ) {
-        // Sixteen lanes run only with AVX-512 and its 32 vector registers;
-        // eight may run with AVX2 and its 16.
-        if LOCAL && !IDS && !DELTAS && N <= if K >= 16 { 2 } else { 1 } {
+        if LOCAL && !IDS && !DELTAS && N <= L::LOCAL_RANKS {
             // The ranks in a local array that never leaves this function,
             // so that they stay in registers through the candidates, at
             // most half the register file. Measured only where it pays:
