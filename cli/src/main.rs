@@ -174,7 +174,7 @@ fn main() -> ExitCode {
                 println!("{line}");
             }
         }),
-        Some(Command::Gallery(args)) => worley_cli::render_cmd::gallery(&args.out, args.tile as usize, true, args.exr)
+        Some(Command::Gallery(args)) => worley_cli::gallery::gallery(&args.out, args.tile as usize, true, args.exr)
             .map(|written| {
                 for path in written {
                     println!("{}", path.display());
@@ -401,7 +401,7 @@ fn main_job() -> Result<(), String> {
 
     let drawn = std::time::Instant::now();
     bar.set_message("gallery");
-    let images = worley_cli::render_cmd::gallery(Path::new("out/gallery"), 384, false, false)?;
+    let images = worley_cli::gallery::gallery(Path::new("out/gallery"), 384, false, false)?;
     bar.inc(1);
     bar.finish_and_clear();
     say!("\ngallery ({} images, {:.1} s on all cores):", images.len(), drawn.elapsed().as_secs_f64());
