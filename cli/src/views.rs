@@ -92,19 +92,9 @@ impl Window {
 /// (each band generates its cells and their margin once), or fewer for a
 /// short window, down to 8, so that every core has four bands.
 pub fn fill_window<T: Send>(window: &Window, out: &mut [T], fill: impl Fn(usize, &mut [T]) + Sync) {
-    let row = window.width.max(1);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let band = window.height.div_ceil(4 * threads).clamp(8, 64);
-    let bands = std::sync::Mutex::new(out.chunks_mut(band * row).enumerate());
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| loop {
-                let next = bands.lock().map(|mut b| b.next()).unwrap_or(None);
-                let Some((b, dst)) = next else { break };
-                fill(b * band, dst);
-            });
-        }
-    });
+    worley_harness::for_each_chunk(out, band * window.width.max(1), &|b, dst| fill(b * band, dst));
 }
 
 /// The window's pixels from whole grid rows: `rows(first, buffer)` fills

@@ -240,6 +240,19 @@ macro_rules! tiered {
     };
 }
 
+/// `f(i, chunk)` for every chunk `i` of `size` items of `out` (the last may
+/// be shorter), on all cores with the `parallel` feature: the command
+/// line's bands of image rows. A `dyn` closure, as in [`chunked`].
+pub fn for_each_chunk<T: Send>(out: &mut [T], size: usize, f: &(dyn Fn(usize, &mut [T]) + Sync)) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        out.par_chunks_mut(size.max(1)).enumerate().for_each(|(i, chunk)| f(i, chunk));
+    }
+    #[cfg(not(feature = "parallel"))]
+    out.chunks_mut(size.max(1)).enumerate().for_each(|(i, chunk)| f(i, chunk));
+}
+
 /// Runs `f` over `0..n` in chunks, on all cores with the `parallel`
 /// feature, and returns the chunks' results in order.
 pub fn chunked<A: Send>(n: usize, f: impl Fn(std::ops::Range<usize>) -> A + Sync + Send) -> Vec<A> {
