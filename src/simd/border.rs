@@ -55,21 +55,34 @@
 //! visiting more, far above that rounding, so no plane the reference could
 //! pick is left unvisited.
 //!
+//! ## Grids
+//! [`SimdBorder::border_grid`] and [`SimdBorder::border_grid_parallel`]
+//! (and textures of the border on grids) take the grid tiles where
+//! [`Simd::coherent_grid`] does: F1 from the tiles' search, then F1's
+//! point and the nearest plane from the points of the band's cells,
+//! broadcast to the tile's lanes (`border/tiles.rs` has the argument for
+//! the bits and the certificate). The nearest plane is the first in one
+//! total order of the points (see `Plane::offer`), so the tiles and the
+//! per-sample search, which meet the points in different orders, choose
+//! the same plane.
+//!
 //! ## Speed
-//! On scattered samples one border costs about five F2 − F1 evaluations
+//! On scattered samples one border costs about 4.5 F2 − F1 evaluations
 //! (F1, finding F1's point again, and a search that reaches F1 + 2b,
 //! farther than F2, over the union of the cells the eight lanes need); on
-//! a grid about 23, since grids of F_n share their cells and borders do
-//! not yet. The peers bench (`peers/`) reports it beside F2 − F1.
+//! a grid about 5 through the tiles (23 to 32 per sample before). The peers
+//! bench (`peers/`) reports it beside F2 − F1.
 
 use wide::{f32x8, u32x8};
 
 mod search;
+mod tiles;
 
 use super::batch::in_cell;
 use super::best::Best;
+use super::coherent::GridRows;
 use super::generate::UNIT;
-use super::lanes::{Eight, Lanes, One};
+use super::lanes::{Eight, Lanes, One, WIDEST};
 use super::locate::Located;
 use super::periodic::wrap;
 use super::{by_eights, per_axis, Grid, Outputs, Period, Point, Simd, SizeError};
@@ -193,11 +206,94 @@ struct Plane<L: Lanes, const D: usize> {
 /// 2^−48: lane units² to cells², exactly.
 const CELLS2: f32 = 1.0 / (1u64 << 48) as f32;
 
+/// Products of the plane test at least this large are normal f32 numbers
+/// with their relative rounding (see [`Plane::offer`]).
+const NORMAL: f32 = 1.0 / (1u128 << 100) as f32;
+/// 1 − 2^−20: products this far apart keep their order through rounding.
+const APART: f32 = 1.0 - 1.0 / (1 << 20) as f32;
+
 impl<L: Lanes, const D: usize> Plane<L, D> {
+    /// No plane yet: b = +∞.
+    #[inline(always)]
+    fn none() -> Self {
+        Plane { key: L::f(f32::INFINITY), uu: L::f(1.0), u: [L::f(0.0); D], id: L::u(INVALID_ID) }
+    }
+
     /// b = k / (2|u|) in lane units (+∞ before any plane).
     #[inline(always)]
     fn distance(&self) -> L::F {
         L::mul(L::div(self.key, L::sqrt(self.uu)), L::f(0.5 * UNIT))
+    }
+
+    /// A point's plane from `us` = u·(δ₁ + δ_j) and |u|² in lane units²,
+    /// offered as [`Plane::offer`] does; u = 0 (F1's point itself, or one
+    /// at its very position) is never taken.
+    #[inline(always)]
+    fn offer_point(&mut self, active: L::M, us: L::F, uu: L::F, u: [L::F; D], id: L::U) {
+        // k = −u·(δ₁ + δ_j); a tie with a later ID may round to a hair
+        // below zero. In cells², the products stay far inside f32's range.
+        let key = L::mul(L::select(L::lt(us, L::f(0.0)), L::sub(L::f(0.0), us), L::f(0.0)), L::f(CELLS2));
+        let uu = L::mul(uu, L::f(CELLS2));
+        self.offer(L::and(active, L::lt(L::f(0.0), uu)), key, uu, u, id);
+    }
+
+    /// A point's plane (`key`, `uu` in cells², `u`, `id`) in the lanes of
+    /// `active`, where it is nearer than the running one.
+    ///
+    /// The planes are ordered by the f64 value k²/|u|² (one rounding of
+    /// exact f32 inputs) and then by ID: a total order in which every point
+    /// has its own place, so the nearest plane does not depend on the order
+    /// in which a search meets the points (the per-sample search, the grid
+    /// tiles and the sorted batches meet them in different orders). The
+    /// f32 products k_j²·|u|² and k²·|u_j|² decide it where they lie more
+    /// than 2^−20 apart and are normal: each carries two roundings of 2^−24,
+    /// so the exact products, and the f64 ratios, are in the same order. The
+    /// rare lanes closer than that are decided by the f64 ratios themselves.
+    #[inline(always)]
+    fn offer(&mut self, active: L::M, key: L::F, uu: L::F, u: [L::F; D], id: L::U) {
+        let mine = L::mul(L::mul(key, key), self.uu);
+        let theirs = L::mul(L::mul(self.key, self.key), uu);
+        let below = L::and(L::lt(mine, L::mul(theirs, L::f(APART))), L::le(L::f(NORMAL), theirs));
+        let above = L::and(L::lt(theirs, L::mul(mine, L::f(APART))), L::le(L::f(NORMAL), mine));
+        let close = L::and(active, L::lt(L::select(L::or(below, above), L::f(1.0), L::f(0.0)), L::f(0.5)));
+        let mut better = L::and(active, below);
+        if L::any(close) {
+            better = L::or(better, self.nearer_f64(close, key, uu, id));
+        }
+        self.key = L::select(better, key, self.key);
+        self.uu = L::select(better, uu, self.uu);
+        self.id = L::select_u(better, id, self.id);
+        for (slot, ua) in self.u.iter_mut().zip(u) {
+            *slot = L::select(better, ua, *slot);
+        }
+    }
+
+    /// The lanes of `close` where the point's plane comes first in the
+    /// order of [`Plane::offer`], by the f64 ratios and the IDs.
+    #[cold]
+    #[inline(never)]
+    fn nearer_f64(&self, close: L::M, key: L::F, uu: L::F, id: L::U) -> L::M {
+        let lanes = |v: L::F| {
+            let mut a = [0f32; WIDEST];
+            L::f_store(v, &mut a[..L::N]);
+            a
+        };
+        let ids = |v: L::U| {
+            let mut a = [0u32; WIDEST];
+            L::u_store(v, &mut a[..L::N]);
+            a
+        };
+        let (k, uu, id) = (lanes(key), lanes(uu), ids(id));
+        let (pk, puu, pid) = (lanes(self.key), lanes(self.uu), ids(self.id));
+        let ratio = |k: f32, uu: f32| f64::from(k) * f64::from(k) / f64::from(uu);
+        let mut nearer = [0f32; WIDEST];
+        for i in (0..L::N).filter(|&i| L::bits(close) & (1 << i) != 0) {
+            let (mine, theirs) = (ratio(k[i], uu[i]), ratio(pk[i], puu[i]));
+            if mine < theirs || (mine == theirs && id[i] < pid[i]) {
+                nearer[i] = 1.0;
+            }
+        }
+        L::lt(L::f(0.5), L::f_load(&nearer[..L::N]))
     }
 }
 
@@ -303,6 +399,9 @@ impl<const D: usize> SimdBorder<D> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
+        if self.kernel.grid_coherent(grid, out, false) {
+            return Ok(());
+        }
         for (c, dst) in out.chunks_mut(8).enumerate() {
             let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(c * 8 + i.min(dst.len() - 1)));
             dst.copy_from_slice(&self.border8(&block).lanes()[..dst.len()]);
@@ -317,63 +416,98 @@ impl<const D: usize> SimdBorder<D> {
     /// [`SizeError`] if `out.len() != grid.len()`; nothing is written.
     #[cfg(feature = "parallel")]
     pub fn border_grid_parallel(&self, grid: &Grid<D>, out: &mut [Border32<D>]) -> Result<(), SizeError> {
+        if grid.len() == Some(out.len()) && self.kernel.grid_coherent(grid, out, true) {
+            return Ok(());
+        }
         grid.fill_by_eights(out, |block| self.border8(block).lanes())
     }
 
-    /// Eight located lanes: F1 and the border search through the kernel's
-    /// eight-lane dispatch (its AVX2 copy where that runs).
+    /// Rows `first..` of a located grid (whole rows), the bits
+    /// [`SimdBorder::border_grid`] writes for them: a texture's octaves.
+    pub(crate) fn grid_rows_into(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [Border32<D>]) {
+        self.kernel.grid_rows_into(rows, first, out)
+    }
+
+    /// Eight located lanes.
     fn eight(&self, at: &Located<Eight, D>) -> Border8<D> {
-        let k = &self.kernel;
-        let (_, _, raw) = k.dispatch8_whole(at);
-        let (plane, found) = k.border_search8(at, &raw);
-        let r = Self::result::<Eight>(k, at, &raw, &plane, found);
-        Border8 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
+        eight_of(&self.kernel, at)
     }
 
-    /// One located sample, in the one-lane instantiation: the same
-    /// operations per lane as [`SimdBorder::eight`], so the same bits.
+    /// One located sample.
     fn one(&self, at: &Located<One, D>) -> Border32<D> {
-        let k = &self.kernel;
-        let (_, _, raw) = k.dispatch_one(at);
-        let (plane, found) = k.border_search::<One>(at, &raw);
-        let r = Self::result::<One>(k, at, &raw, &plane, found);
-        Border32 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
+        border_one(&self.kernel, at)
     }
+}
 
+/// Eight located lanes: F1 and the border search through the kernel's
+/// eight-lane dispatch (its AVX2 copy where that runs).
+pub(super) fn eight_of<const D: usize>(k: &Simd<D, 1>, at: &Located<Eight, D>) -> Border8<D> {
+    let (_, _, raw) = k.dispatch8_whole(at);
+    let (plane, found) = k.border_search8(at, &raw);
+    let r = Results::<Eight, D>::of(k, k.good_lanes::<Eight>(at), &raw, &plane, found);
+    Border8 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
+}
+
+/// One located sample, in the one-lane instantiation: the same operations
+/// per lane as [`eight_of`], so the same bits.
+pub(super) fn border_one<const D: usize>(k: &Simd<D, 1>, at: &Located<One, D>) -> Border32<D> {
+    let (_, _, raw) = k.dispatch_one(at);
+    let (plane, found) = k.border_search::<One>(at, &raw);
+    let r = Results::<One, D>::of(k, k.good_lanes::<One>(at), &raw, &plane, found);
+    Border32 { distance: r.distance, normal: r.normal, feature: r.feature, neighbour: r.neighbour }
+}
+
+/// [`Border8`]'s fields in any lane set.
+struct Results<L: Lanes, const D: usize> {
+    distance: L::F,
+    normal: [L::F; D],
+    feature: L::U,
+    neighbour: L::U,
+}
+
+impl<L: Lanes, const D: usize> Results<L, D> {
     /// The border, its normal and the two IDs from F1 (`raw`, as the
-    /// kernel holds it) and the nearest plane; NaN and [`INVALID_ID`] for
-    /// lanes without a result.
+    /// kernel holds it) and the nearest plane, in the lanes of `valid`
+    /// (the others, and lanes without a number, NaN and [`INVALID_ID`]).
     #[inline(always)]
-    fn result<L: Lanes>(
-        k: &Simd<D, 1>,
-        at: &Located<L, D>,
-        raw: &Best<L, D, 1>,
-        plane: &Plane<L, D>,
-        found: L::M,
-    ) -> Lanewise<L, D> {
+    fn of<const N: usize>(k: &Simd<D, N>, valid: L::M, raw: &Best<L, D, N>, plane: &Plane<L, D>, found: L::M) -> Self {
         let b = plane.distance();
-        let good = L::and(found, k.good_lanes::<L>(at, raw.rank[0], b));
+        // A comparison with NaN is false.
+        let numbers = L::and(L::le(L::f(0.0), raw.rank[0]), L::le(L::f(0.0), b));
+        let good = L::and(found, L::and(valid, numbers));
         let scale = L::mul(L::f(1.0 / UNIT), L::f(k.inv_scale));
         let distance = L::mul(b, scale);
         let length = L::mul(L::sqrt(plane.uu), L::f(UNIT));
         // No normal without a plane (+∞ in window mode with one point).
         let planar = L::and(good, L::lt(b, L::f(f32::INFINITY)));
         let normal = per_axis(|a| L::select(planar, L::div(L::neg(plane.u[a]), length), L::f(f32::NAN)));
-        Lanewise {
+        Results {
             distance: L::select(good, distance, L::f(f32::NAN)),
             normal,
             feature: L::select_u(good, raw.id[0], L::u(INVALID_ID)),
             neighbour: L::select_u(good, plane.id, L::u(INVALID_ID)),
         }
     }
-}
 
-/// [`Border8`]'s fields in any lane set.
-struct Lanewise<L: Lanes, const D: usize> {
-    distance: L::F,
-    normal: [L::F; D],
-    feature: L::U,
-    neighbour: L::U,
+    /// Every lane as a [`Border32`].
+    #[inline(always)]
+    fn lanes(&self) -> [Border32<D>; WIDEST] {
+        let mut distance = [0f32; WIDEST];
+        L::f_store(self.distance, &mut distance[..L::N]);
+        let mut normal = [[0f32; WIDEST]; D];
+        for (lanes, v) in normal.iter_mut().zip(self.normal) {
+            L::f_store(v, &mut lanes[..L::N]);
+        }
+        let (mut feature, mut neighbour) = ([0u32; WIDEST], [0u32; WIDEST]);
+        L::u_store(self.feature, &mut feature[..L::N]);
+        L::u_store(self.neighbour, &mut neighbour[..L::N]);
+        std::array::from_fn(|i| Border32 {
+            distance: distance[i],
+            normal: std::array::from_fn(|a| normal[a][i]),
+            feature: feature[i],
+            neighbour: neighbour[i],
+        })
+    }
 }
 
 /// A default build runs the border search through its AVX2 copy where the

@@ -224,7 +224,8 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         }
         // IDs only where the tiles read them: whole results with IDs asked
         // for, or of the other metrics, whose tiles always track them.
-        let ids = T::FULL && (self.outputs != Outputs::Distances || self.config.metric != Metric::Euclidean);
+        let ids = T::REGION_IDS
+            || (T::FULL && (self.outputs != Outputs::Distances || self.config.metric != Metric::Euclidean));
         let band = Band { grid, axes, first, region: Region::generate(self, lo, hi, ids) };
         match Others::of(self.config.metric) {
             None => self.tiles_euclid(self.outputs, &band, out),

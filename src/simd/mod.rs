@@ -95,7 +95,7 @@
 //! | `avx512.rs` | the run-time sixteen-lane copies of slices and tiles |
 //! | `tiles.rs`, `tile.rs`, `coherent.rs` | the coherent path: rows of tiles, one tile's bound and certificate, the grid calls |
 //! | `batch.rs`, `periodic.rs` | slices, grids and points given as a cell plus a fraction; the tileable variant |
-//! | `border.rs`, `border/search.rs` | the distance to the cell's border and its search |
+//! | `border.rs`, `border/search.rs`, `border/tiles.rs` | the distance to the cell's border, its per-sample search and its grid tiles |
 //!
 //! ## Build flags
 //! `wide` chooses its instructions at compile time only. Build with

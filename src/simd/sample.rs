@@ -4,7 +4,8 @@
 
 use super::best::Best;
 use super::lanes::{Lanes, WIDEST};
-use super::{Features32, Simd};
+use super::tiles::{TileAt, TileCells};
+use super::{Features32, Metric32, Simd};
 use crate::definition::INVALID_ID;
 
 /// A sample position the kernel accepts, converted to f64 user units.
@@ -50,8 +51,20 @@ pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy
     /// false: distances only, whatever it was built for (the distances are
     /// the same bits either way).
     const FULL: bool;
-    /// Up to [`Lanes::N`] lanes of a finished result into `dst`.
-    fn write<L: Lanes, const IDS: bool, const DELTAS: bool>(b: &Best<L, D, N>, dst: &mut [Self]);
+    /// Whether the region holds the points' IDs even where the tiles do not
+    /// read them (the border reads them after the tiles' search).
+    const REGION_IDS: bool = false;
+    /// A tile's results into its rows of `out`, from its search's raw
+    /// results (`best`, ranks in lane units, as [`Simd::tile`] leaves them)
+    /// and what the search read.
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, N>,
+        metric: M,
+        cells: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, N>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    );
     /// Grid points `first..first + dst.len()` by the per-sample kernel.
     fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]);
 }
@@ -59,8 +72,19 @@ pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy
 impl<const D: usize, const N: usize> GridSample<D, N> for Features32<D, N> {
     const FULL: bool = true;
     #[inline(always)]
-    fn write<L: Lanes, const IDS: bool, const DELTAS: bool>(b: &Best<L, D, N>, dst: &mut [Self]) {
-        write_lanes::<L, D, N, IDS, DELTAS>(b, dst)
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, N>,
+        _: M,
+        _: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, N>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    ) {
+        for (k, b) in best.iter_mut().enumerate().take(at.rows) {
+            simd.finish::<L, DELTAS>(b);
+            simd.forget_unasked::<L, IDS, DELTAS>(b);
+            write_lanes::<L, D, N, IDS, DELTAS>(b, at.row(out, k));
+        }
     }
     fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {
         simd.grid_range(grid, first, dst)
@@ -70,17 +94,29 @@ impl<const D: usize, const N: usize> GridSample<D, N> for Features32<D, N> {
 impl<const D: usize, const N: usize> GridSample<D, N> for [f32; N] {
     const FULL: bool = false;
     #[inline(always)]
-    fn write<L: Lanes, const IDS: bool, const DELTAS: bool>(b: &Best<L, D, N>, dst: &mut [Self]) {
-        if N == 1 && dst.len() == L::N {
-            // One store of the lanes, the common case of a full tile row.
-            return L::f_store(b.rank[0], dst.as_flattened_mut());
-        }
-        let mut distance = [[0.0; WIDEST]; N];
-        for (k, lanes) in distance.iter_mut().enumerate() {
-            L::f_store(b.rank[k], &mut lanes[..L::N]);
-        }
-        for (i, o) in dst.iter_mut().enumerate() {
-            *o = std::array::from_fn(|k| distance[k][i]);
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, N>,
+        _: M,
+        _: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, N>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    ) {
+        for (k, b) in best.iter_mut().enumerate().take(at.rows) {
+            simd.finish::<L, DELTAS>(b);
+            let dst = at.row(out, k);
+            if N == 1 && dst.len() == L::N {
+                // One store of the lanes, the common case of a full tile row.
+                L::f_store(b.rank[0], dst.as_flattened_mut());
+                continue;
+            }
+            let mut distance = [[0.0; WIDEST]; N];
+            for (j, lanes) in distance.iter_mut().enumerate() {
+                L::f_store(b.rank[j], &mut lanes[..L::N]);
+            }
+            for (i, o) in dst.iter_mut().enumerate() {
+                *o = std::array::from_fn(|j| distance[j][i]);
+            }
         }
     }
     fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {

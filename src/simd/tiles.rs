@@ -71,6 +71,30 @@ pub(super) struct Tile<L: Lanes, const D: usize> {
     pub(super) bhi: [f32; D],
 }
 
+/// Where a tile's results go: the grid band's width, the tile's first row
+/// and column, and how many of its rows and columns lie in the band.
+pub(super) struct TileAt {
+    pub(super) width: usize,
+    pub(super) r0: usize,
+    pub(super) x0: usize,
+    pub(super) rows: usize,
+    pub(super) cols: usize,
+}
+
+impl TileAt {
+    /// The outputs of the tile's row `k`.
+    #[inline(always)]
+    pub(super) fn row<'o, T>(&self, out: &'o mut [T], k: usize) -> &'o mut [T] {
+        let o = (self.r0 + k) * self.width + self.x0;
+        &mut out[o..o + self.cols]
+    }
+}
+
+/// What a tile's results are computed from: the band's region, the tile,
+/// and its row of tiles' rows of cells with their points' gap terms
+/// ([`Simd::cell_rows`]).
+pub(super) type TileCells<'a, L, const D: usize> = (&'a Region<D>, &'a Tile<L, D>, (&'a [CellRow<L, D>], &'a [f32]));
+
 /// One cell along axis 0 of a tile's searched cells.
 #[derive(Clone, Copy, Default)]
 pub(super) struct AxisCell {
@@ -91,6 +115,8 @@ pub(super) struct CellRow<L: Lanes, const D: usize> {
     pub(super) rest: f32,
     /// Whether it holds the tiles' own cells on axes 1...
     pub(super) own: bool,
+    /// Its cell minus the tiles' reference cell on axes 1.. (0 unused).
+    pub(super) offset: [i64; D],
     /// Each row of samples' position minus the corner on axes 1.. (lane k
     /// is row k; 0 unused).
     pub(super) shift: [L::F; D],
@@ -249,12 +275,15 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 } else {
                     self.tile::<L, K, M, IDS, DELTAS, true>(metric, region, &tile, (&cell_rows, &near), &mut best);
                 }
-                for (k, b) in best.iter_mut().enumerate().take(rows_here) {
-                    self.finish::<L, DELTAS>(b);
-                    self.forget_unasked::<L, IDS, DELTAS>(b);
-                    let o = (r0 + k) * width + x0;
-                    T::write::<L, IDS, DELTAS>(b, &mut out[o..o + cols_here]);
-                }
+                let at = TileAt { width, r0, x0, rows: rows_here, cols: cols_here };
+                T::tile_out::<L, K, M, IDS, DELTAS>(
+                    self,
+                    metric,
+                    (region, &tile, (&cell_rows, &near)),
+                    &mut best,
+                    out,
+                    &at,
+                );
             }
         }
     }
@@ -305,6 +334,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 // Folded as in `Metric32::rank`: axes 1, 2, …, then 0.
                 rest: terms[1..].iter().copied().reduce(|r, v| metric.fold::<One>(r, v)).unwrap_or(0.0),
                 own: (1..D).all(|a| c[a] != lo[a] && c[a] != hi[a]),
+                offset: std::array::from_fn(|a| if a == 0 { 0 } else { c[a] - t.reference[a] }),
                 shift,
             };
             let (s, e) = (region.start[row.base] as usize, region.start[row.base + region.side[0]] as usize);

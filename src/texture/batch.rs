@@ -192,7 +192,8 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         // Rows `first..` of every octave, combined and summed into `dst`,
         // in the order and with the operations of `filtered8`.
         let band = |first: usize, dst: &mut [f32]| {
-            let mut distances = vec![[0f32; N]; dst.len()];
+            let mut distances = vec![[0f32; N]; if self.border.is_some() { 0 } else { dst.len() }];
+            let mut borders = None;
             for (i, (octave, &(_, amplitude, _))) in rows.iter().zip(&self.octaves).enumerate() {
                 let a = alpha[i];
                 let Some(octave) = octave else {
@@ -201,15 +202,26 @@ impl<const D: usize, const N: usize> Texture<D, N> {
                     }
                     continue;
                 };
-                self.values.grid_rows_distances(octave, first, &mut distances);
-                for (sum, d) in dst.chunks_mut(8).zip(distances.chunks(8)) {
-                    let f: [f32x8; N] =
-                        std::array::from_fn(|k| f32x8::from(std::array::from_fn(|j| d[j.min(d.len() - 1)][k])));
-                    let v = self.combination.value(&f).to_array();
-                    for (s, v) in sum.iter_mut().zip(v) {
+                let sum = |sum: &mut [f32], v: &[f32]| {
+                    for (s, &v) in sum.iter_mut().zip(v) {
                         let v = if a == 1.0 { v } else { a * v + (1.0 - a) * mean };
                         *s = if i == 0 { v } else { *s + amplitude * v };
                     }
+                };
+                if let Some(border) = &self.border {
+                    // The border through the grid tiles, its distance the value.
+                    let borders = borders.get_or_insert_with(|| vec![crate::Border32::default(); dst.len()]);
+                    border.grid_rows_into(octave, first, borders);
+                    for (s, b) in dst.chunks_mut(8).zip(borders.chunks(8)) {
+                        sum(s, &std::array::from_fn::<f32, 8, _>(|j| b[j.min(b.len() - 1)].distance));
+                    }
+                    continue;
+                }
+                self.values.grid_rows_distances(octave, first, &mut distances);
+                for (s, d) in dst.chunks_mut(8).zip(distances.chunks(8)) {
+                    let f: [f32x8; N] =
+                        std::array::from_fn(|k| f32x8::from(std::array::from_fn(|j| d[j.min(d.len() - 1)][k])));
+                    sum(s, &self.combination.value(&f).to_array());
                 }
             }
         };
@@ -240,7 +252,6 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
         let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
         let suits = finite
-            && self.border.is_none()
             && self.period.is_none()
             && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300)
             && alpha.iter().zip(&self.octaves).all(|(&a, &(f, _, _))| {

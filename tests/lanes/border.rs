@@ -320,3 +320,66 @@ fn fractal_borders_sum_the_octaves() {
         }
     }
 }
+
+/// Grids through the tiles (fine steps, eight and sixteen samples a tile,
+/// sparse and dense patterns, 2D to 4D) against the one-point call.
+fn grid_is_per_sample<const D: usize>(config: Config, grid: Grid<D>) -> usize {
+    let border = SimdBorder::<D>::new(config).unwrap();
+    let kernel = worley::Simd::<D, 1>::new(Config { order: 1, ..config }, worley::Outputs::IdsAndDeltas).unwrap();
+    assert!(kernel.coherent_grid(&grid), "{grid:?} takes the tiles");
+    let n = grid.len().unwrap();
+    let mut out = vec![Border32::default(); n];
+    border.border_grid(&grid, &mut out).unwrap();
+    let mut parallel = vec![Border32::default(); n];
+    border.border_grid_parallel(&grid, &mut parallel).unwrap();
+    for (i, (b, p)) in out.iter().zip(&parallel).enumerate() {
+        let one = border.border(grid.point(i));
+        let what = format!("{D}D {config:?} {grid:?} sample {i}");
+        assert_same(b, &one, &what);
+        assert_same(p, &one, &what);
+    }
+    n
+}
+
+#[test]
+fn grid_tiles_give_the_per_sample_border_bits() {
+    let mut n = 0;
+    for (seed, density) in [(1, 5.0), (2, 0.5), (3, 32.0), (4, 1.5)] {
+        let config = Config { seed, density, ..Config::default() };
+        // Steps of a hundredth of a cell to an eighth (a tile of sixteen
+        // samples, then of eight, within two cells).
+        let cell = |d: usize| {
+            1.0 / match d {
+                2 => Reference::<2>::new(config).unwrap().pattern().scale(),
+                3 => Reference::<3>::new(config).unwrap().pattern().scale(),
+                _ => Reference::<4>::new(config).unwrap().pattern().scale(),
+            }
+        };
+        for (i, part) in [97.0, 31.0, 12.0, 8.5].into_iter().enumerate() {
+            let origin = -4.0 + 1.7 * i as f64;
+            let step = cell(2) / part;
+            n += grid_is_per_sample::<2>(
+                config,
+                Grid { origin: [origin, 3.1], step: [step, step * 1.3], size: [97, 70] },
+            );
+            let step = cell(3) / part;
+            n += grid_is_per_sample::<3>(
+                config,
+                Grid { origin: [origin, -2.2, 0.4], step: [step, step, 0.31], size: [83, 40, 3] },
+            );
+            let step = cell(4) / part;
+            n += grid_is_per_sample::<4>(
+                config,
+                Grid { origin: [0.3, origin, 1.0, -7.0], step: [step, step * 0.7, 0.2, 0.5], size: [40, 20, 2, 2] },
+            );
+        }
+        // Lattice values: samples on cell faces and corners.
+        let scale = Reference::<3>::new(config).unwrap().pattern().scale();
+        let cell = 1.0 / scale;
+        n += grid_is_per_sample::<3>(
+            config,
+            Grid { origin: [-cell, 0.0, 2.0 * cell], step: [cell / 16.0, cell / 8.0, cell], size: [64, 32, 2] },
+        );
+    }
+    println!("{n} grid samples");
+}

@@ -11,24 +11,20 @@ use super::super::lanes::{Eight, Lanes, WIDEST};
 use super::super::locate::Located;
 use super::super::search::outside;
 use super::super::{per_axis, Simd};
-use super::{Plane, CELLS2, SLACK};
+use super::{Plane, SLACK};
 use crate::config::Mode;
-use crate::definition::{FRACTION_BITS, INVALID_ID};
+use crate::definition::FRACTION_BITS;
 use crate::reference::{shell, MAX_SHELLS};
 
 impl<const D: usize> Simd<D, 1> {
-    /// Lanes with a result: not bad input, and no search (F1's or the
-    /// border's) that gave up at [`MAX_SHELLS`] (NaN).
+    /// Lanes of valid input (the others get NaN and [`INVALID_ID`](crate::INVALID_ID)).
     #[inline(always)]
-    pub(super) fn good_lanes<L: Lanes>(&self, at: &Located<L, D>, f1: L::F, b: L::F) -> L::M {
+    pub(super) fn good_lanes<L: Lanes>(&self, at: &Located<L, D>) -> L::M {
         let mut valid = [0f32; WIDEST];
         for (v, ok) in valid.iter_mut().zip(&at.valid) {
             *v = if *ok { 1.0 } else { 0.0 };
         }
-        let valid = L::lt(L::f(0.5), L::f_load(&valid[..L::N]));
-        // A comparison with NaN is false.
-        let numbers = L::and(L::le(L::f(0.0), f1), L::le(L::f(0.0), b));
-        L::and(valid, numbers)
+        L::lt(L::f(0.5), L::f_load(&valid[..L::N]))
     }
 
     /// [`Simd::border_search`] in eight lanes, through its AVX2 copy where
@@ -74,7 +70,7 @@ impl<const D: usize> Simd<D, 1> {
     #[inline(always)]
     pub(super) fn border_search<L: Lanes>(&self, at: &Located<L, D>, nearest: &Best<L, D, 1>) -> (Plane<L, D>, L::M) {
         let f1 = L::sqrt(nearest.rank[0]);
-        let mut plane = Plane { key: L::f(f32::INFINITY), uu: L::f(1.0), u: [L::f(0.0); D], id: L::u(INVALID_ID) };
+        let mut plane = Plane::none();
         // Lanes with an F1 (not NaN, not +∞ from an empty window); the
         // others have no point to find and keep b = +∞.
         let mut open = L::lt(f1, L::f(f32::INFINITY));
@@ -209,22 +205,7 @@ impl<const D: usize> Simd<D, 1> {
                 uu = L::add(uu, L::mul(u[a], u[a]));
                 us = L::add(us, L::mul(u[a], L::add(d1[a], dj)));
             }
-            // A tie with a later ID may round to a hair below zero.
-            let key = L::mul(L::select(L::lt(us, L::f(0.0)), L::sub(L::f(0.0), us), L::f(0.0)), L::f(CELLS2));
-            let uu = L::mul(uu, L::f(CELLS2));
-            // b_j < b ⇔ k_j²·|u|² < k²·|u_j|², all terms ≥ 0: no square
-            // root or division per point. In cells², the products stay far
-            // inside f32's range.
-            let (mine, theirs) = (L::mul(L::mul(key, key), plane.uu), L::mul(L::mul(plane.key, plane.key), uu));
-            let tie = L::and(L::eq(mine, theirs), L::u_lt(id, plane.id));
-            // u = 0: F1's point itself, or one at its very position.
-            let better = L::and(L::and(active, L::lt(L::f(0.0), uu)), L::or(L::lt(mine, theirs), tie));
-            plane.key = L::select(better, key, plane.key);
-            plane.uu = L::select(better, uu, plane.uu);
-            plane.id = L::select_u(better, id, plane.id);
-            for (slot, ua) in plane.u.iter_mut().zip(u) {
-                *slot = L::select(better, ua, *slot);
-            }
+            plane.offer_point(active, us, uu, u, id);
         }
     }
 }
