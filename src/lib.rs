@@ -178,7 +178,7 @@ pub use wide;
 
 pub use config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 pub use definition::{Pattern, INVALID_ID};
-pub use reference::{Border, Features, Reference};
+pub use reference::{Border, Features, NSphere, Reference, Smooth, SMOOTH_TOLERANCE};
 pub use simd::{
     by_eights, simd_level, Border32, Border8, Features32, Features8, Grid, Outputs, Period, PeriodError, Point, Simd,
     SimdBorder, SizeError,

@@ -47,7 +47,9 @@ use crate::config::{Config, ConfigError, Metric, Mode, MAX_ORDER};
 use crate::definition::{Pattern, INVALID_ID, MAX_CELL_COORD};
 
 pub mod border;
+pub mod smooth;
 pub use border::Border;
+pub use smooth::{NSphere, Smooth, SMOOTH_TOLERANCE};
 
 /// The largest Chebyshev radius of cells an exact search visits.
 pub const MAX_SHELLS: u32 = 16;

@@ -17,5 +17,6 @@ mod oracle;
 mod perlin;
 mod properties;
 mod sentinel_id;
+mod smooth;
 mod statistics;
 mod texture;
