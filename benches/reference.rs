@@ -1,7 +1,8 @@
 //! Throughput of the f64 reference kernel: F1, F2 and F4 in 2D, 3D and 4D on
 //! 4096 seeded random points in [−1000, 1000]^d, and on a 64×64 grid slice;
-//! and the distance to the cell's border on the same points, to set beside
-//! F2 (which F2 − F1 needs).
+//! and the distance to the cell's border, smooth F1 (s = 0.1 and 0.3) and
+//! the n-sphere radius on the same points, to set beside F2 (which F2 − F1
+//! needs).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
@@ -38,16 +39,25 @@ fn bench_dim<const D: usize>(c: &mut Criterion) {
         }
     }
     let basis = Reference::<D>::new(Config::default()).unwrap();
-    let mut borders = vec![0.0f64; POINTS];
-    for (name, points) in [("random", &random), ("grid", &grid)] {
-        group.bench_function(BenchmarkId::new(name, "border"), |b| {
-            b.iter(|| {
-                for (x, o) in black_box(points).iter().zip(borders.iter_mut()) {
-                    *o = basis.border(*x).map_or(f64::NAN, |b| b.distance);
-                }
-                black_box(&borders);
-            })
-        });
+    let mut values = vec![0.0f64; POINTS];
+    type Output<'a, const D: usize> = (&'a str, Box<dyn Fn([f64; D]) -> f64 + 'a>);
+    let outputs: [Output<'_, D>; 4] = [
+        ("border", Box::new(|x| basis.border(x).map_or(f64::NAN, |b| b.distance))),
+        ("smooth F1 s=0.1", Box::new(|x| basis.smooth_f1(x, 0.1).value)),
+        ("smooth F1 s=0.3", Box::new(|x| basis.smooth_f1(x, 0.3).value)),
+        ("n-sphere radius", Box::new(|x| basis.n_sphere(x).radius)),
+    ];
+    for (output, f) in &outputs {
+        for (name, points) in [("random", &random), ("grid", &grid)] {
+            group.bench_function(BenchmarkId::new(name, output), |b| {
+                b.iter(|| {
+                    for (x, o) in black_box(points).iter().zip(values.iter_mut()) {
+                        *o = f(*x);
+                    }
+                    black_box(&values);
+                })
+            });
+        }
     }
     group.finish();
 }
