@@ -25,21 +25,7 @@ struct Oracle {
 fn oracle<const D: usize>(pattern: &Pattern<D>, x: [f64; D]) -> Oracle {
     let (cell, f) = pattern.locate(x).expect("a valid sample");
     for r in 2i64..=8 {
-        let side = 2 * r + 1;
-        let mut points: Vec<([f64; D], u32)> = Vec::new();
-        for index in 0..side.pow(D as u32) {
-            let mut rest = index;
-            let offset: [i64; D] = std::array::from_fn(|_| {
-                let o = rest % side - r;
-                rest /= side;
-                o
-            });
-            let c: [i64; D] = std::array::from_fn(|a| cell[a] + offset[a]);
-            for p in pattern.points(c) {
-                let q = p.offset();
-                points.push((std::array::from_fn(|a| offset[a] as f64 + q[a]), p.id));
-            }
-        }
+        let mut points = crate::block(pattern, cell, r);
         let squared = |p: &[f64; D]| -> f64 { (0..D).map(|a| (f[a] - p[a]) * (f[a] - p[a])).sum() };
         points.sort_by(|a, b| squared(&a.0).total_cmp(&squared(&b.0)).then(a.1.cmp(&b.1)));
         let (p1, feature) = points[0];

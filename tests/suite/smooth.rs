@@ -8,26 +8,7 @@ use worley::definition::Pattern;
 use worley::{Config, Metric, Mode, Reference, INVALID_ID, SMOOTH_TOLERANCE};
 use worley_harness::sample_point;
 
-/// Every point of the block of Chebyshev radius `r` around the sample's
-/// cell, relative to that cell's corner (cell units), with its ID.
-fn block<const D: usize>(pattern: &Pattern<D>, cell: [i64; D], r: i64) -> Vec<([f64; D], u32)> {
-    let side = 2 * r + 1;
-    let mut points = Vec::new();
-    for index in 0..side.pow(D as u32) {
-        let mut rest = index;
-        let offset: [i64; D] = std::array::from_fn(|_| {
-            let o = rest % side - r;
-            rest /= side;
-            o
-        });
-        let c: [i64; D] = std::array::from_fn(|a| cell[a] + offset[a]);
-        for p in pattern.points(c) {
-            let q = p.offset();
-            points.push((std::array::from_fn(|a| offset[a] as f64 + q[a]), p.id));
-        }
-    }
-    points
-}
+use crate::block;
 
 /// −s·ln Σ exp(−(√(F² + s²) − s)/s) over a block `r` cells wide, summed
 /// plainly from the nearest point (user units): the definition, with no
