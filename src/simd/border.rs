@@ -243,8 +243,8 @@ impl<L: Lanes, const D: usize> Plane<L, D> {
     /// The planes are ordered by the f64 value k²/|u|² (one rounding of
     /// exact f32 inputs) and then by ID: a total order in which every point
     /// has its own place, so the nearest plane does not depend on the order
-    /// in which a search meets the points (the per-sample search, the grid
-    /// tiles and the sorted batches meet them in different orders). The
+    /// in which a search meets the points (the per-sample search and the
+    /// grid tiles meet them in different orders). The
     /// f32 products k_j²·|u|² and k²·|u_j|² decide it where they lie more
     /// than 2^−20 apart and are normal: each carries two roundings of 2^−24,
     /// so the exact products, and the f64 ratios, are in the same order. The

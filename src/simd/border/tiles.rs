@@ -3,8 +3,11 @@
 //! the same points of the band's region, broadcast to the tile's lanes.
 //!
 //! ## Why the bits are the per-sample border's
-//! F1, its ID and its delta are the tiles' and so the per-sample kernel's
-//! bits. A candidate's delta is computed as the tiles compute it, which is
+//! F1 is the tiles' distance, and so the per-sample kernel's bits. Its
+//! point is the one whose rank, computed as the tiles compute it, has those
+//! bits, the smallest ID first: the kernel's own choice among equal ranks,
+//! so the ID and the delta are the kernel's too. A candidate's delta is
+//! computed as the tiles compute it, which is
 //! how the per-sample search computes it (the sample's fraction minus the
 //! cell's offset, an exact multiple of [`UNIT`], minus the point's 24-bit
 //! coordinate); u = p_j − p₁ is the same exact integer difference in the
@@ -41,8 +44,8 @@ use super::super::{Metric32, Simd};
 use super::{border_one, eight_of, Border32, Plane, Results, SLACK};
 use crate::definition::FRACTION_BITS;
 
-/// The border through the grid tiles: the kernel's [`Simd::tile`] gives F1
-/// with its ID and delta, [`Simd::border_tile`] the rest.
+/// The border through the grid tiles: the kernel's [`Simd::tile`] gives
+/// F1's distance, [`Simd::border_tile`] its point and the rest.
 impl<const D: usize> GridSample<D, 1> for Border32<D> {
     // F1's distance alone (the tiles' fastest search), and the IDs for
     // the rest.
