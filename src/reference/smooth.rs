@@ -40,16 +40,24 @@
 //! the Euclidean metric, √d in the others). The value is therefore
 //! continuous to within that tolerance: where the search stops one shell
 //! later, it adds at most the bound. Larger `s` needs larger blocks: a
-//! search that would pass [`MAX_SHELLS`] gives NaN (at the default density
-//! that takes `s` above about ten times the mean F1).
+//! search that would pass [`MAX_SHELLS`] gives NaN. At the default density
+//! (mean F1 = 1) that is s above about 2 in 3D and 3 in 2D; in 3D, s = 0.1
+//! sums a block of radius 1 or 2, s = 0.3 one of radius 3 and s = 1 one
+//! of radius 8 (2000 samples).
+//!
+//! S is a smooth minimum over every point, not a distance: where s is a
+//! good part of the spacing of the points, many of them weigh, and S falls
+//! below 0 (−s·ln N for N points at the same distance). At the default
+//! density in 3D, over the same 2000 samples, its smallest value was 0.02
+//! for s = 0.1, −0.16 for s = 0.3 and −2.75 for s = 1.
 //!
 //! The sum is kept as a running log-sum-exp (the smallest h so far and the
 //! weights relative to it), so no weight underflows however small `s`.
 //!
 //! ## The n-sphere radius
 //! Half the distance from F1's point p₁ to the point nearest to it: the
-//! largest sphere around p₁ that two such spheres never overlap, a dot
-//! that fits inside p₁'s cell. It is F2 evaluated at p₁ itself (whose F1 is
+//! largest radius at which no two points' spheres overlap around p₁, a
+//! dot that fits inside p₁'s cell. It is F2 evaluated at p₁ itself (whose F1 is
 //! p₁, at distance 0), halved, by the same certified search as F_n; p₁'s
 //! position is exact in f64 (a cell plus a 24-bit fraction), so the search
 //! starts from the point, not from a rounded copy. A point at p₁'s very
