@@ -207,6 +207,9 @@ fn filtered_grids_their_bands_and_slices_give_each_points_filtered_value() {
     )
     .unwrap();
     check(&t3, &grid);
+    // The border's octaves through its own grid tiles.
+    let border = Texture::<2, 1>::new(Config::default(), Combination::Border, Fractal::octaves(3), None).unwrap();
+    check(&border, &grid);
 }
 
 #[test]

@@ -403,6 +403,9 @@ fn texture_grids_give_each_points_value_on_every_path() {
     // Combinations of several distances, other metrics, 3D and 4D.
     let crackle = Texture::<3, 2>::new(c, Combination::crackle(), Fractal::octaves(3), None).unwrap();
     grid_matches_points(&crackle, &Grid { origin: [0.3, -1.7, 2.5], step: [0.04, 0.05, 0.3], size: [37, 21, 3] });
+    // The border, whose octaves take its own grid tiles.
+    let border = Texture::<3, 1>::new(c, Combination::Border, Fractal::octaves(3), None).unwrap();
+    grid_matches_points(&border, &Grid { origin: [0.3, -1.7, 2.5], step: [0.04, 0.05, 0.3], size: [37, 21, 3] });
     let product = Config { metric: Metric::Manhattan, seed: 4, ..c };
     let t = Texture::<3, 2>::new(product, Combination::Product, Fractal::octaves(2), None).unwrap();
     grid_matches_points(&t, &Grid { origin: [10.0, 0.0, -0.5], step: [0.03, 0.0, 0.2], size: [64, 1, 5] });
