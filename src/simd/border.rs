@@ -470,7 +470,7 @@ impl<L: Lanes, const D: usize> Results<L, D> {
     /// kernel holds it) and the nearest plane, in the lanes of `valid`
     /// (the others, and lanes without a number, NaN and [`INVALID_ID`]).
     #[inline(always)]
-    fn of<const N: usize>(k: &Simd<D, N>, valid: L::M, raw: &Best<L, D, N>, plane: &Plane<L, D>, found: L::M) -> Self {
+    fn of(k: &Simd<D, 1>, valid: L::M, raw: &Best<L, D, 1>, plane: &Plane<L, D>, found: L::M) -> Self {
         let b = plane.distance();
         // A comparison with NaN is false.
         let numbers = L::and(L::le(L::f(0.0), raw.rank[0]), L::le(L::f(0.0), b));

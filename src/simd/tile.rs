@@ -9,8 +9,7 @@ use super::locate::Located;
 use super::metric::distance_of_rank;
 use super::region::{next_cell, Region};
 use super::tiles::{
-    cell_gap, inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, Spill, Tile, SLACK_ABS,
-    SLACK_REL,
+    inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, Spill, Tile, SLACK_ABS, SLACK_REL,
 };
 use super::{per_axis, Metric32, Simd};
 use crate::config::MAX_ORDER;
@@ -82,15 +81,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // Along axis 0: offset of the cell's index in its row, the metric's
         // term of the gap between the cell and the tile's box, and whether
         // it is the tile's own.
-        let mut x_cells = [AxisCell::default(); 4];
-        let count = (hi[0] - lo[0] + 1) as usize;
-        for (xc, c) in x_cells.iter_mut().zip(lo[0]..=hi[0]) {
-            *xc = AxisCell {
-                index: (c - region.origin[0]) as usize,
-                term: metric.term::<One>(cell_gap((c - t.reference[0]) as f32 * UNIT, t.blo[0], t.bhi[0])),
-                own: c != lo[0] && c != hi[0],
-            };
-        }
+        let (x_cells, count) = AxisCell::row(metric, region, t, (lo[0], hi[0]));
         let x_cells = &x_cells[..count];
         // Each lane's position on axis 0 minus the corner of the cell
         // `cell` cells from the region's first (exact small integers).

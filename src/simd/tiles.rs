@@ -106,6 +106,30 @@ pub(super) struct AxisCell {
     pub(super) own: bool,
 }
 
+impl AxisCell {
+    /// The searched cells `lo ..= hi` of tile `t` along axis 0 (its own
+    /// and one more on each side; at most four): each one's offset in its
+    /// row of the region's cells, the metric's term of its gap to the
+    /// tile's box, and whether it is own; and how many there are.
+    #[inline(always)]
+    pub(super) fn row<L: Lanes, M: Metric32, const D: usize>(
+        metric: M,
+        region: &Region<D>,
+        t: &Tile<L, D>,
+        (lo, hi): (i64, i64),
+    ) -> ([AxisCell; 4], usize) {
+        let mut cells = [AxisCell::default(); 4];
+        for (xc, c) in cells.iter_mut().zip(lo..=hi) {
+            *xc = AxisCell {
+                index: (c - region.origin[0]) as usize,
+                term: metric.term::<One>(cell_gap((c - t.reference[0]) as f32 * UNIT, t.blo[0], t.bhi[0])),
+                own: c != lo && c != hi,
+            };
+        }
+        (cells, (hi - lo + 1) as usize)
+    }
+}
+
 /// A row of cells along axis 0 searched by a row of tiles.
 pub(super) struct CellRow<L: Lanes, const D: usize> {
     /// The region's index of the row's first cell.

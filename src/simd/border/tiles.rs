@@ -37,7 +37,7 @@ use super::super::locate::Located;
 use super::super::region::Region;
 use super::super::sample::{Grid, GridSample};
 use super::super::tiles::{
-    cell_gap, inflate, lanes_from, lanes_of, largest, load, point_gap, CellRow, Tile, TileAt, TileCells, SLACK_ABS,
+    inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, Tile, TileAt, TileCells, SLACK_ABS,
     SLACK_REL,
 };
 use super::super::{Metric32, Simd};
@@ -213,7 +213,7 @@ struct BorderTile<'a, L: Lanes, M, const D: usize> {
     near: &'a [f32],
     lo: [i64; D],
     hi: [i64; D],
-    x_cells: [(usize, f32, bool); 4],
+    x_cells: [AxisCell; 4],
     count: usize,
     /// The tile's rows inside the grid.
     used: usize,
@@ -224,13 +224,7 @@ impl<'a, L: Lanes, M: Metric32, const D: usize> BorderTile<'a, L, M, D> {
     fn new(metric: M, (region, t, (rows, near)): TileCells<'a, L, D>, used: usize) -> Self {
         let lo: [i64; D] = std::array::from_fn(|a| t.reference[a] - 1);
         let hi: [i64; D] = std::array::from_fn(|a| t.hi[a] + 1);
-        let mut x_cells = [(0, 0.0, false); 4];
-        let count = (hi[0] - lo[0] + 1) as usize;
-        for (i, slot) in x_cells.iter_mut().enumerate().take(count) {
-            let c = lo[0] + i as i64;
-            let gap = cell_gap((c - t.reference[0]) as f32 * UNIT, t.blo[0], t.bhi[0]);
-            *slot = ((c - region.origin[0]) as usize, metric.term::<One>(gap), c != lo[0] && c != hi[0]);
-        }
+        let (x_cells, count) = AxisCell::row(metric, region, t, (lo[0], hi[0]));
         BorderTile { metric, region, t, rows, near, lo, hi, x_cells, count, used }
     }
 
@@ -364,7 +358,7 @@ macro_rules! for_each_point {
             if row.rest > prune {
                 continue;
             }
-            for &(index, term, own_x) in &tile.x_cells[..tile.count] {
+            for &AxisCell { index, term, own: own_x } in &tile.x_cells[..tile.count] {
                 if own != (own_x && row.own) || metric.fold::<One>(row.rest, term) > prune {
                     continue;
                 }
