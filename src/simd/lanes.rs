@@ -580,14 +580,18 @@ pub(super) unsafe fn broadcast_fma(
     one: std::arch::x86_64::__m512,
 ) -> std::arch::x86_64::__m512 {
     let mut sum = b;
-    std::arch::asm!(
-        "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
-        sum = inout(zmm_reg) sum,
-        one = in(zmm_reg) one,
-        a = in(reg) a.as_ptr(),
-        k = in(reg) k,
-        options(pure, readonly, nostack, preserves_flags),
-    );
+    // The caller upholds the contract above; the instruction reads `a[k]`
+    // and nothing else in memory.
+    unsafe {
+        std::arch::asm!(
+            "vfmadd231ps {sum}, {one}, dword ptr [{a} + 4 * {k}]{{1to16}}",
+            sum = inout(zmm_reg) sum,
+            one = in(zmm_reg) one,
+            a = in(reg) a.as_ptr(),
+            k = in(reg) k,
+            options(pure, readonly, nostack, preserves_flags),
+        );
+    }
     sum
 }
 
