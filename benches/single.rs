@@ -5,13 +5,14 @@
 //! 3D, the default configuration (λ 5, Euclidean, exact), 20 000 seeded
 //! random points in [−1000, 1000]³, one thread. The cases run round-robin,
 //! nine rounds; each figure is the median round, in millions of points per
-//! second. The texture is F2 − F1 summed over five octaves; its f64
+//! second. The n-sphere radius is `SimdNSphere` against
+//! `Reference::n_sphere`. The texture is F2 − F1 summed over five octaves; its f64
 //! reference is the same sum of `Reference` evaluations.
 
 use std::hint::black_box;
 use std::time::Instant;
 use worley::texture::{Combination, Fractal, Texture};
-use worley::{Border32, Config, Features32, Outputs, Reference, Simd, SimdBorder};
+use worley::{Border32, Config, Features32, NSphere32, Outputs, Reference, Simd, SimdBorder, SimdNSphere};
 use worley_harness::sample_point;
 
 const POINTS: usize = 20_000;
@@ -25,12 +26,14 @@ fn main() {
     let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Distances).unwrap();
     let f2 = Simd::<3, 2>::new(c2, Outputs::Distances).unwrap();
     let border = SimdBorder::<3>::new(Config::default()).unwrap();
+    let spheres = SimdNSphere::<3>::new(Config::default()).unwrap();
     let texture = Texture::<3, 2>::new(c2, Combination::crackle(), Fractal::octaves(5), None).unwrap();
     let reference1 = Reference::<3>::new(Config::default()).unwrap();
     let reference2 = Reference::<3>::new(c2).unwrap();
     let fractal = Fractal::octaves(5);
     let (mut o1, mut o2) = (vec![Features32::<3, 1>::default(); POINTS], vec![Features32::<3, 2>::default(); POINTS]);
     let mut ob = vec![Border32::<3>::default(); POINTS];
+    let mut on = vec![NSphere32::INVALID; POINTS];
     let mut ov = vec![0f32; POINTS];
     let crackle = |f: &worley::Features<3>| f.distances()[1] - f.distances()[0];
     let mut cases: Vec<Case> = vec![
@@ -68,6 +71,16 @@ fn main() {
             }),
         ),
         ("border", "f64 reference", Box::new(|p| p.iter().map(|&x| reference1.border(x).unwrap().distance).sum())),
+        ("n-sphere", "one point", Box::new(|p| p.iter().map(|&x| f64::from(spheres.n_sphere(x).radius)).sum())),
+        (
+            "n-sphere",
+            "slice",
+            Box::new(|p| {
+                spheres.n_sphere_slice(p, &mut on).unwrap();
+                on.iter().map(|n| f64::from(n.radius)).sum()
+            }),
+        ),
+        ("n-sphere", "f64 reference", Box::new(|p| p.iter().map(|&x| reference1.n_sphere(x).radius).sum())),
         ("texture", "one point", Box::new(|p| p.iter().map(|&x| f64::from(texture.value(x))).sum())),
         (
             "texture",

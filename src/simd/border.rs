@@ -75,8 +75,11 @@
 
 use wide::{f32x8, u32x8};
 
+pub mod nsphere;
 mod search;
 mod tiles;
+
+pub use nsphere::{NSphere32, NSphere8, SimdNSphere};
 
 use super::batch::in_cell;
 use super::best::Best;

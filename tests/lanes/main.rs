@@ -18,4 +18,5 @@ mod border;
 mod coherent;
 mod hard_cases;
 mod levels;
+mod nsphere;
 mod simd;

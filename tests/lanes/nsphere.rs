@@ -1,0 +1,135 @@
+//! The n-sphere radius in lanes (`SimdNSphere`) against the f64 reference
+//! (`Reference::n_sphere`, itself held to brute force in
+//! `tests/suite/smooth.rs`), the same bits through every entry point, and
+//! bad lanes kept to themselves.
+
+use worley::{Config, ConfigError, Grid, Metric, Mode, NSphere32, Reference, SimdNSphere, INVALID_ID};
+use worley_harness::{chunked, sample_point};
+
+/// The stated bound: the radius is F2 halved at an exact centre, and F2
+/// is within 4ε(F2 + 1/S) of the exact distance.
+fn bound(radius: f64, inv_scale: f64) -> f64 {
+    2.0 * f64::from(f32::EPSILON) * (2.0 * radius + inv_scale)
+}
+
+/// Largest error over the bound, and how many radii were +∞.
+fn agrees<const D: usize>(config: Config, seed: u64, n: usize, range: f64) -> (f64, usize) {
+    let reference = Reference::<D>::new(config).unwrap();
+    let simd = SimdNSphere::<D>::new(config).unwrap();
+    let inv_scale = 1.0 / reference.pattern().scale();
+    let points: Vec<[f64; D]> = (0..n).map(|i| sample_point::<D>(seed, i, range)).collect();
+    let mut got = vec![NSphere32::INVALID; n];
+    simd.n_sphere_slice(&points, &mut got).unwrap();
+    let (mut worst, mut unbounded) = (0f64, 0);
+    for (x, g) in points.iter().zip(&got) {
+        let want = reference.n_sphere(*x);
+        assert_eq!((g.feature, g.neighbour), (want.feature, want.neighbour), "{D}D at {x:?}: {g:?} against {want:?}");
+        if want.radius.is_nan() {
+            // Window mode with no point around the sample: no centre.
+            assert!(g.radius.is_nan() && want.feature == INVALID_ID, "{D}D at {x:?}: {g:?} against {want:?}");
+            continue;
+        }
+        if want.radius.is_infinite() {
+            unbounded += 1;
+            assert_eq!(f64::from(g.radius), want.radius, "{D}D at {x:?}");
+            continue;
+        }
+        let (error, allowed) = ((f64::from(g.radius) - want.radius).abs(), bound(want.radius, inv_scale));
+        assert!(error <= allowed, "{D}D at {x:?}: {} against {} (bound {allowed:e})", g.radius, want.radius);
+        worst = worst.max(error / allowed);
+    }
+    (worst, unbounded)
+}
+
+#[test]
+fn simd_n_sphere_agrees_with_the_reference_in_every_dimension() {
+    let c = |seed, density| Config { seed, density, ..Config::default() };
+    let window = |seed, density| Config { mode: Mode::Window, ..c(seed, density) };
+    let runs = chunked(6, |range| {
+        range
+            .map(|run| match run {
+                0 => ("2D", agrees::<2>(c(0, 5.0), 1, 100_000, 1000.0)),
+                1 => ("3D", agrees::<3>(c(0, 5.0), 2, 50_000, 1000.0)),
+                2 => ("4D", agrees::<4>(c(0, 5.0), 3, 10_000, 1000.0)),
+                // Sparse points: F1's point lies cells away, and so may its
+                // neighbour.
+                3 => ("3D λ 0.5", agrees::<3>(c(7, 0.5), 4, 20_000, 1000.0)),
+                4 => ("2D λ 32", agrees::<2>(c(3, 32.0), 5, 20_000, 100.0)),
+                // Sparse enough that some windows around a centre hold no
+                // other point: +∞, as the reference says.
+                _ => ("2D window λ 0.3", agrees::<2>(window(2, 0.3), 6, 20_000, 100.0)),
+            })
+            .collect::<Vec<_>>()
+    });
+    for (name, (worst, unbounded)) in runs.into_iter().flatten() {
+        println!("{name}: worst error {worst:.3} of the bound, {unbounded} unbounded");
+        if name.contains("window") {
+            assert!(unbounded > 0, "{name}: no window without a second point, so +∞ went untested");
+        }
+    }
+}
+
+#[test]
+fn simd_n_sphere_gives_the_same_bits_through_every_entry_point() {
+    fn check<const D: usize>(config: Config) {
+        let simd = SimdNSphere::<D>::new(config).unwrap();
+        let grid =
+            Grid { origin: [-3.3; D], step: [0.37; D], size: std::array::from_fn(|a| if a < 2 { 13 } else { 3 }) };
+        let mut out = vec![NSphere32::INVALID; grid.len().unwrap()];
+        simd.n_sphere_grid(&grid, &mut out).unwrap();
+        let bits = |n: &NSphere32| (n.radius.to_bits(), n.feature, n.neighbour);
+        for (i, g) in out.iter().enumerate() {
+            let x = grid.point(i);
+            assert_eq!(bits(g), bits(&simd.n_sphere(x)), "{D}D grid sample {i}");
+        }
+        for (c, chunk) in out.chunks(8).enumerate().take(20) {
+            if chunk.len() < 8 {
+                break;
+            }
+            let x: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(c * 8 + i));
+            let eight = simd.n_sphere8(&x);
+            // The same numbers read as cells and fractions (other points
+            // of the pattern): eight lanes against one.
+            let cells: [[i64; D]; 8] = std::array::from_fn(|i| x[i].map(|v| v.floor() as i64));
+            let fractions: [[f32; D]; 8] = std::array::from_fn(|i| x[i].map(|v| (v - v.floor()) as f32));
+            let in_cell = simd.n_sphere8_in_cell(&cells, &fractions);
+            for i in 0..8 {
+                assert_eq!(bits(&eight.lane(i)), bits(&chunk[i]), "{D}D eight, lane {i}");
+                assert_eq!(
+                    bits(&in_cell.lane(i)),
+                    bits(&simd.n_sphere_in_cell(cells[i], fractions[i])),
+                    "{D}D in cell"
+                );
+            }
+        }
+    }
+    let config = Config { density: 2.0, seed: 11, ..Config::default() };
+    check::<2>(config);
+    check::<3>(config);
+    check::<4>(config);
+    check::<3>(Config { mode: Mode::Window, ..config });
+}
+
+#[test]
+fn simd_n_sphere_keeps_bad_lanes_to_themselves_and_refuses_other_metrics() {
+    let simd = SimdNSphere::<3>::new(Config::default()).unwrap();
+    let mut x: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64 * 0.61, 2.5, -7.25]);
+    let good = simd.n_sphere8(&x);
+    x[2][1] = f64::NAN;
+    x[5][0] = f64::INFINITY;
+    x[6][2] = -1e300;
+    let mixed = simd.n_sphere8(&x);
+    for i in 0..8 {
+        let n = mixed.lane(i);
+        if [2, 5, 6].contains(&i) {
+            assert!(n.radius.is_nan() && n.feature == INVALID_ID && n.neighbour == INVALID_ID, "lane {i}: {n:?}");
+        } else {
+            assert_eq!(n, good.lane(i), "lane {i} changed with its neighbours");
+            assert!(n.radius > 0.0 && n.neighbour != n.feature, "lane {i}: {n:?}");
+        }
+    }
+    for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
+        let config = Config { metric, ..Config::default() };
+        assert_eq!(SimdNSphere::<3>::new(config).unwrap_err(), ConfigError::BorderMetric(metric));
+    }
+}
