@@ -255,7 +255,9 @@ pub enum ConfigError {
     /// The bump fraction is outside [0, 1] or NaN.
     Bump(f64),
     /// The distance to the cell's border was asked under a metric other
-    /// than the Euclidean one, whose bisectors are not planes.
+    /// than the Euclidean one, whose bisectors are not planes; or the
+    /// n-sphere radius in lanes ([`crate::SimdNSphere`]), which finds F1's
+    /// point as the border does (the f64 reference takes every metric).
     BorderMetric(Metric),
 }
 
@@ -278,7 +280,7 @@ impl fmt::Display for ConfigError {
             }
             ConfigError::BorderMetric(m) => write!(
                 f,
-                "the distance to the cell border is defined for the Euclidean metric only, not {m}: its bisectors are not planes"
+                "the distance to the cell border (and the SIMD n-sphere radius) is defined for the Euclidean metric only, not {m}: its bisectors are not planes"
             ),
         }
     }
