@@ -246,8 +246,8 @@ impl<const D: usize> SimdNSphere<D> {
             L::u_store(v, &mut p[..L::N]);
         }
         let low = (1u32 << FRACTION_BITS) - 1;
-        for i in 0..L::N {
-            c.found[i] = found & (1 << i) != 0;
+        for i in (0..L::N).filter(|&i| found & (1 << i) != 0) {
+            c.found[i] = true;
             for a in 0..D {
                 // The position relative to the sample's cell, two's
                 // complement in lane units: its cell offset and its
