@@ -43,7 +43,8 @@
 //! search that would pass [`MAX_SHELLS`] gives NaN. At the default density
 //! (mean F1 = 1) that is s above about 2 in 3D and 3 in 2D; in 3D, s = 0.1
 //! sums a block of radius 1 or 2, s = 0.3 one of radius 3 and s = 1 one
-//! of radius 8 (2000 samples).
+//! of radius 8 (2000 random samples, counted by a program not kept in the
+//! repository).
 //!
 //! S is a smooth minimum over every point, not a distance: where s is a
 //! good part of the spacing of the points, many of them weigh, and S falls

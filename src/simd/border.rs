@@ -405,10 +405,7 @@ impl<const D: usize> SimdBorder<D> {
         if self.kernel.grid_coherent(grid, out, false) {
             return Ok(());
         }
-        for (c, dst) in out.chunks_mut(8).enumerate() {
-            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(c * 8 + i.min(dst.len() - 1)));
-            dst.copy_from_slice(&self.border8(&block).lanes()[..dst.len()]);
-        }
+        grid.eights_into(0, out, |block| self.border8(block).lanes());
         Ok(())
     }
 

@@ -230,13 +230,7 @@ impl<const D: usize> Grid<D> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        let tile = |t: usize, dst: &mut [T]| {
-            for (c, d8) in dst.chunks_mut(8).enumerate() {
-                let start = t * TILE + c * 8;
-                let block: [[f64; D]; 8] = std::array::from_fn(|i| self.point(start + i.min(d8.len() - 1)));
-                d8.copy_from_slice(&f(&block)[..d8.len()]);
-            }
-        };
+        let tile = |t: usize, dst: &mut [T]| self.eights_into(t * TILE, dst, &f);
         #[cfg(feature = "parallel")]
         crate::parallel::for_each_chunk(out, TILE, &tile);
         #[cfg(not(feature = "parallel"))]
@@ -244,6 +238,22 @@ impl<const D: usize> Grid<D> {
             tile(t, dst);
         }
         Ok(())
+    }
+
+    /// The points from index `first` on, eight at a time on the calling
+    /// thread, through `f` into `dst` (one value per point); a last block of
+    /// fewer than eight repeats its last point.
+    pub(crate) fn eights_into<T: Copy>(
+        &self,
+        first: usize,
+        dst: &mut [T],
+        mut f: impl FnMut(&[[f64; D]; 8]) -> [T; 8],
+    ) {
+        for (c, d8) in dst.chunks_mut(8).enumerate() {
+            let start = first + c * 8;
+            let block: [[f64; D]; 8] = std::array::from_fn(|i| self.point(start + i.min(d8.len() - 1)));
+            d8.copy_from_slice(&f(&block)[..d8.len()]);
+        }
     }
 
     /// The number of rows: lines of points along axis 0, counted over axis

@@ -170,11 +170,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let Some(octaves) = self.octave_grids(grid, &alpha) else {
             // Eight points at a time, each at its own grid index.
             let each = |start: usize, dst: &mut [f32]| {
-                for (c, d8) in dst.chunks_mut(8).enumerate() {
-                    let at = first * row + start + c * 8;
-                    let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(at + i.min(d8.len() - 1)));
-                    d8.copy_from_slice(&self.filtered8(&block, [width; 8]).to_array()[..d8.len()]);
-                }
+                grid.eights_into(first * row + start, dst, |block| self.filtered8(block, [width; 8]).to_array());
             };
             #[cfg(feature = "parallel")]
             if parallel {

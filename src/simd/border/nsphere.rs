@@ -180,10 +180,7 @@ impl<const D: usize> SimdNSphere<D> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        for (c, dst) in out.chunks_mut(8).enumerate() {
-            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(c * 8 + i.min(dst.len() - 1)));
-            dst.copy_from_slice(&self.n_sphere8(&block).lanes()[..dst.len()]);
-        }
+        grid.eights_into(0, out, |block| self.n_sphere8(block).lanes());
         Ok(())
     }
 
