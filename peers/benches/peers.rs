@@ -23,6 +23,9 @@
 //! - fastnoise-lite `Cellular`: one jittered point per cell, scalar.
 //! - noise (noise-rs) `Worley`: f64, one point per cell from a fixed table.
 //!
+//! - `binning floor` (frames only): what a binned `evaluate_slice` would
+//!   spend moving the samples, with no search (see [`BinningFloor`]).
+//!
 //! After criterion's groups, one round-robin run of every contestant in
 //! this process prints the headline table: median M samples/s of 15 rounds
 //! after 3 unmeasured ones (a single call takes a millisecond or less, so
@@ -228,6 +231,68 @@ fn simdnoise_points_avx2(xs: &[Vec<f32>; 3], out: &mut [f32], f2: bool) {
     }
 }
 
+/// A lower bound on what a binned `evaluate_slice` must spend moving its
+/// samples, with no evaluation at all: each sample located in its cell (the
+/// kernel's scale, an f32 floor per axis) and keyed by a hash of the cell,
+/// a counting sort of the sample indices by key (over the whole batch or
+/// per window of consecutive samples), then every sample read in
+/// that order and a whole result (20 bytes, `Features32<3, 1>`) written
+/// back at its input index. A stand-in of three operations takes the place
+/// of the search, so the loop cannot be dropped. Any design that groups
+/// arbitrary points by cell and returns results in input order does at
+/// least this much; the frame rows put it beside the peers' whole cost.
+struct BinningFloor {
+    scale: f32,
+    /// Samples sorted together: the whole batch, or windows of this many.
+    window: usize,
+    /// Bucket bits: 2^14 counters (64 KiB) for a whole batch stay in the L2
+    /// cache; a window of 4096 samples gets 2^10.
+    bits: u32,
+    keys: Vec<u32>,
+    starts: Vec<u32>,
+    order: Vec<u32>,
+}
+
+impl BinningFloor {
+    fn new(n: usize, window: usize) -> Self {
+        let scale = worley::Reference::<3>::new(Config::default()).unwrap().pattern().scale() as f32;
+        let bits = if window >= n { 14 } else { 10 };
+        BinningFloor { scale, window, bits, keys: vec![0; n], starts: vec![0; 1 << bits], order: vec![0; n] }
+    }
+
+    /// `locate` false keeps the keys of the last run: the sort and the
+    /// moves alone.
+    fn run(&mut self, pts: &[[f32; 3]], out: &mut [Features32<3, 1>], locate: bool) {
+        let (s, shift) = (self.scale, 32 - self.bits);
+        for (k, p) in self.keys.iter_mut().zip(pts).filter(|_| locate) {
+            let c = p.map(|v| (v * s).floor() as i32 as u32);
+            let h = c[0].wrapping_mul(0x9E37_79B1) ^ c[1].wrapping_mul(0x85EB_CA77) ^ c[2].wrapping_mul(0xC2B2_AE3D);
+            *k = h >> shift;
+        }
+        for (w, (keys, order)) in self.keys.chunks(self.window).zip(self.order.chunks_mut(self.window)).enumerate() {
+            let base = (w * self.window) as u32;
+            self.starts.fill(0);
+            for &k in keys {
+                self.starts[k as usize] += 1;
+            }
+            let mut sum = 0;
+            for c in self.starts.iter_mut() {
+                (*c, sum) = (sum, sum + *c);
+            }
+            for (i, &k) in keys.iter().enumerate() {
+                let slot = &mut self.starts[k as usize];
+                order[*slot as usize] = base + i as u32;
+                *slot += 1;
+            }
+        }
+        for &i in &self.order {
+            let (p, key) = (pts[i as usize], self.keys[i as usize]);
+            let f = p.map(|v| v * s - (v * s).floor());
+            out[i as usize] = Features32 { distance: [f[0] * f[0] + f[1] * f[1] + f[2] * f[2]], delta: [f], id: [key] };
+        }
+    }
+}
+
 /// The grid slice as a [`Grid`]: the same points as `points().1`.
 fn grid_spec() -> Grid<3> {
     Grid { origin: [0.0, 0.0, 0.5], step: [STEP, STEP, 1.0], size: [SIDE, SIDE, 1] }
@@ -297,6 +362,9 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let mut frame_f1: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
     let mut frame_f2: Vec<Vec<Features32<3, 2>>> = (0..3).map(|_| slice_out2[..1].repeat(m)).collect();
     let mut frame_crackle: Vec<Vec<f32>> = (0..3).map(|_| vec![0f32; m]).collect();
+    let mut frame_floor: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
+    let mut frame_moves: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
+    let mut frame_windows: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
     let mut entries: Vec<Entry> = Vec::new();
     fn add<'a>(
         entries: &mut Vec<Entry<'a>>,
@@ -451,12 +519,15 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         ["frame-fine F1", "frame-fine F2−F1"],
     ];
     let simd_ok = simdnoise_points(&frame_axes[0], &mut frame_out[0].1, false);
-    for (k, ((((xs, (q, s1, s2)), o1f), o2f), cr)) in frame_axes
+    for (k, (((((((xs, (q, s1, s2)), o1f), o2f), cr), floor_out), moves_out), windows_out)) in frame_axes
         .iter()
         .zip(frame_out.iter_mut())
         .zip(frame_f1.iter_mut())
         .zip(frame_f2.iter_mut())
         .zip(frame_crackle.iter_mut())
+        .zip(frame_floor.iter_mut())
+        .zip(frame_moves.iter_mut())
+        .zip(frame_windows.iter_mut())
         .enumerate()
     {
         let pts: &[[f32; 3]] = &frames[k];
@@ -477,6 +548,31 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
                 );
             }
         }
+        let (mut floor, mut moves, mut windows) =
+            (BinningFloor::new(m, m), BinningFloor::new(m, m), BinningFloor::new(m, 4096));
+        moves.run(pts, floor_out, true);
+        windows.run(pts, floor_out, true);
+        add(
+            &mut entries,
+            "binning floor: locate, sort by cell and back, no search",
+            c1,
+            m,
+            Box::new(move || floor.run(black_box(pts), black_box(&mut floor_out[..]), true)),
+        );
+        add(
+            &mut entries,
+            "binning floor, cells given: sort and back only",
+            c1,
+            m,
+            Box::new(move || moves.run(black_box(pts), black_box(&mut moves_out[..]), false)),
+        );
+        add(
+            &mut entries,
+            "binning floor, cells given: sort in windows of 4096 and back",
+            c1,
+            m,
+            Box::new(move || windows.run(black_box(pts), black_box(&mut windows_out[..]), false)),
+        );
         let (f1, f2) = (&f1, &f2);
         add(
             &mut entries,
