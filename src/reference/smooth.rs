@@ -55,6 +55,34 @@
 //! The sum is kept as a running log-sum-exp (the smallest h so far and the
 //! weights relative to it), so no weight underflows however small `s`.
 //!
+//! ## Compact smooth F1
+//! The log-sum-exp above lets every point pull, so its search runs to
+//! about F1 + 14s before the rest weighs under 10^−6. The compact form
+//! lets only the points near F1 pull, and is exact: S is the root of
+//!
+//! Σ_j φ((h_j − S)/s) = 1, φ(t) = exp(1 − 1/(1 − t)) for t < 1, 0 for t ≥ 1,
+//!
+//! with h_j the hyperbolic distance above.
+//!
+//! - **Why this form.** φ is C∞ (all its derivatives vanish at t = 1),
+//!   falls from φ(0) = 1 to 0, and is 0 beyond t = 1. The sum grows with S,
+//!   is at least 1 at S = h_1 (F1's point alone gives φ(0)) and is 0 at
+//!   S = h_1 − s, so the root is unique and lies in (h_1 − s, h_1]; by the
+//!   implicit function theorem it is C∞ in the h_j, hence in position (the
+//!   sum's derivative in S is never 0, and which points take part changes
+//!   only where their φ and all its derivatives are 0).
+//! - **Reach.** A point takes part only if h_j < S + s ≤ h_1 + s, that is
+//!   F_j < √((h_1 + 2s)² − s²) < F1 + 2s: the search is a certified search
+//!   of radius below F1 + 2s, with nothing left out and no tolerance.
+//! - **Limits.** S ≤ h_1 ≤ F1, S > h_1 − s ≥ F1 − 2s, so S → F1 as s → 0;
+//!   where F1's point stands alone within that reach, S = h_1 exactly.
+//! - **Gradient.** ∇S = Σ_j w_j ∇h_j / Σ_j w_j with
+//!   w_j = −φ'(t_j) = φ(t_j)/(1 − t_j)², t_j = (h_j − S)/s: a weighted mean
+//!   of the ∇h_j, so |∇S| ≤ 1 in the Euclidean metric.
+//!
+//! The reference finds the root by bisection of (h_1 − s, h_1] until the
+//! interval stops shrinking in f64.
+//!
 //! ## The n-sphere radius
 //! Half the distance from F1's point p₁ to the point nearest to it: the
 //! largest radius at which no two points' spheres overlap around p₁, a
@@ -217,6 +245,111 @@ impl<const D: usize> Reference<D> {
         }
     }
 
+    /// Compact smooth F1 at `x` (user units) with smoothness `s` (user
+    /// units), as the [module's text](self) defines it: exact (every point
+    /// that takes part is found by a certified search, the root to f64
+    /// precision). `s = 0` gives F1 and its gradient, as
+    /// [`Reference::smooth_f1`]; a negative, infinite or NaN `s`, or bad
+    /// `x`, gives [`Smooth::invalid`]. In [`Mode::Window`] the points of
+    /// the 3^d block take part; an empty block gives +∞.
+    ///
+    /// ```
+    /// use worley::{Config, Reference};
+    /// let basis = Reference::<3>::new(Config::default()).unwrap();
+    /// let x = [1.5, -0.25, 4.0];
+    /// let f1 = basis.evaluate(x).distance[0];
+    /// let smooth = basis.smooth_f1_compact(x, 0.3);
+    /// assert!(smooth.value <= f1 && smooth.value > f1 - 2.0 * 0.3);
+    /// ```
+    pub fn smooth_f1_compact(&self, x: [f64; D], s: f64) -> Smooth<D> {
+        match self.pattern.locate(x) {
+            Some((cell, f)) => self.compact_in_cell(cell, f, s),
+            None => Smooth::invalid(),
+        }
+    }
+
+    /// [`Reference::smooth_f1_compact`] at `cell + fraction` (cell units).
+    pub fn smooth_f1_compact_in_cell(&self, cell: [i64; D], fraction: [f64; D], s: f64) -> Smooth<D> {
+        if !valid_in_cell(&cell, &fraction) {
+            return Smooth::invalid();
+        }
+        self.compact_in_cell(cell, fraction, s)
+    }
+
+    fn compact_in_cell(&self, cell: [i64; D], f: [f64; D], s: f64) -> Smooth<D> {
+        if !(s > 0.0 && s.is_finite()) {
+            // s = 0 is F1 itself; the rest is invalid.
+            return self.smooth_in_cell(cell, f, s);
+        }
+        let metric = self.config.metric;
+        let scale = self.pattern.scale();
+        let sc = s * scale;
+        let (nearest, _, gave_up) = self.search(cell, f, 1);
+        let f1 = metric.distance_of_rank(nearest.rank[0]);
+        if gave_up || f1.is_nan() {
+            return Smooth::invalid();
+        }
+        if f1.is_infinite() {
+            // Window mode, and the 3^d block is empty.
+            return Smooth { value: f64::INFINITY, gradient: [f64::NAN; D], feature: INVALID_ID, shells: 1 };
+        }
+        let h1 = f1.hypot(sc) - sc;
+        let reach = ((h1 + 2.0 * sc).powi(2) - sc * sc).sqrt();
+        // Every point nearer than the reach: h_j and ∇h_j (cell units).
+        let mut near: Vec<(f64, [f64; D])> = Vec::new();
+        let mut add = |offset: [i64; D]| {
+            self.for_each_point_at(cell, offset, |point, _| {
+                let delta: [f64; D] = std::array::from_fn(|a| f[a] - point[a]);
+                let d = metric.distance(&delta);
+                if d < reach {
+                    let root = d.hypot(sc);
+                    let g = if d > 0.0 { distance_gradient(metric, &delta, d).map(|g| g * d / root) } else { [0.0; D] };
+                    near.push((root - sc, g));
+                }
+            });
+        };
+        add([0; D]);
+        for &offset in &self.neighbours {
+            add(offset);
+        }
+        let mut r = 1;
+        while self.config.mode == Mode::Exact && outside_distance(&f, r) < reach {
+            if r == MAX_SHELLS {
+                return Smooth::invalid();
+            }
+            r += 1;
+            for offset in shell(r) {
+                add(offset);
+            }
+        }
+        // The root of Σ φ((h_j − S)/s) = 1 in (h1 − s, h1], by bisection.
+        let total = |v: f64| near.iter().map(|&(h, _)| bump((h - v) / sc)).sum::<f64>();
+        let (mut lo, mut hi) = (h1 - sc, h1);
+        loop {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if total(mid) >= 1.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let value = hi;
+        let mut weight = 0.0;
+        let mut gradient = [0.0; D];
+        for (h, g) in &near {
+            let t = (h - value) / sc;
+            let w = if t < 1.0 { bump(t) / ((1.0 - t) * (1.0 - t)) } else { 0.0 };
+            weight += w;
+            for (sum, g) in gradient.iter_mut().zip(g) {
+                *sum += w * g;
+            }
+        }
+        Smooth { value: value / scale, gradient: gradient.map(|g| g / weight), feature: nearest.id[0], shells: r }
+    }
+
     /// The n-sphere radius at `x` (user units): half the distance from F1's
     /// point to its nearest other point (see the [module's text](self)),
     /// exact by certification in [`Mode::Exact`]; [`NSphere::invalid`] for
@@ -329,4 +462,14 @@ fn outside_weight<const D: usize>(edge: f64, r: u32, s: f64, most: f64) -> f64 {
         }
     }
     f64::INFINITY
+}
+
+/// φ(t) = exp(1 − 1/(1 − t)) below 1, 0 from 1 on: the compact form's
+/// weight, C∞, φ(0) = 1.
+fn bump(t: f64) -> f64 {
+    if t < 1.0 {
+        (1.0 - 1.0 / (1.0 - t)).exp()
+    } else {
+        0.0
+    }
 }

@@ -10,6 +10,7 @@
 
 mod border;
 mod cell_hash;
+mod compact;
 mod filter;
 mod fuzz_regressions;
 mod minkowski;
