@@ -6,13 +6,16 @@
 //! random points in [−1000, 1000]³, one thread. The cases run round-robin,
 //! nine rounds; each figure is the median round, in millions of points per
 //! second. The n-sphere radius is `SimdNSphere` against
-//! `Reference::n_sphere`. The texture is F2 − F1 summed over five octaves; its f64
+//! `Reference::n_sphere`; compact smooth F1 (s = 0.1 and 0.3 user units)
+//! is `SimdSmooth` against `Reference::smooth_f1_compact`. The texture is F2 − F1 summed over five octaves; its f64
 //! reference is the same sum of `Reference` evaluations.
 
 use std::hint::black_box;
 use std::time::Instant;
 use worley::texture::{Combination, Fractal, Texture};
-use worley::{Border32, Config, Features32, NSphere32, Outputs, Reference, Simd, SimdBorder, SimdNSphere};
+use worley::{
+    Border32, Config, Features32, NSphere32, Outputs, Reference, Simd, SimdBorder, SimdNSphere, SimdSmooth, Smooth32,
+};
 use worley_harness::sample_point;
 
 const POINTS: usize = 20_000;
@@ -27,6 +30,7 @@ fn main() {
     let f2 = Simd::<3, 2>::new(c2, Outputs::Distances).unwrap();
     let border = SimdBorder::<3>::new(Config::default()).unwrap();
     let spheres = SimdNSphere::<3>::new(Config::default()).unwrap();
+    let smooth = SimdSmooth::<3>::new(Config::default()).unwrap();
     let texture = Texture::<3, 2>::new(c2, Combination::crackle(), Fractal::octaves(5), None).unwrap();
     let reference1 = Reference::<3>::new(Config::default()).unwrap();
     let reference2 = Reference::<3>::new(c2).unwrap();
@@ -34,6 +38,7 @@ fn main() {
     let (mut o1, mut o2) = (vec![Features32::<3, 1>::default(); POINTS], vec![Features32::<3, 2>::default(); POINTS]);
     let mut ob = vec![Border32::<3>::default(); POINTS];
     let mut on = vec![NSphere32::INVALID; POINTS];
+    let (mut os1, mut os3) = (vec![Smooth32::INVALID; POINTS], vec![Smooth32::INVALID; POINTS]);
     let mut ov = vec![0f32; POINTS];
     let crackle = |f: &worley::Features<3>| f.distances()[1] - f.distances()[0];
     let mut cases: Vec<Case> = vec![
@@ -81,6 +86,42 @@ fn main() {
             }),
         ),
         ("n-sphere", "f64 reference", Box::new(|p| p.iter().map(|&x| reference1.n_sphere(x).radius).sum())),
+        (
+            "smooth F1, s 0.1",
+            "one point",
+            Box::new(|p| p.iter().map(|&x| f64::from(smooth.smooth(x, 0.1).value)).sum()),
+        ),
+        (
+            "smooth F1, s 0.1",
+            "slice",
+            Box::new(|p| {
+                smooth.smooth_slice(p, 0.1, &mut os1).unwrap();
+                os1.iter().map(|v| f64::from(v.value)).sum()
+            }),
+        ),
+        (
+            "smooth F1, s 0.1",
+            "f64 reference",
+            Box::new(|p| p.iter().map(|&x| reference1.smooth_f1_compact(x, 0.1).value).sum()),
+        ),
+        (
+            "smooth F1, s 0.3",
+            "one point",
+            Box::new(|p| p.iter().map(|&x| f64::from(smooth.smooth(x, 0.3).value)).sum()),
+        ),
+        (
+            "smooth F1, s 0.3",
+            "slice",
+            Box::new(|p| {
+                smooth.smooth_slice(p, 0.3, &mut os3).unwrap();
+                os3.iter().map(|v| f64::from(v.value)).sum()
+            }),
+        ),
+        (
+            "smooth F1, s 0.3",
+            "f64 reference",
+            Box::new(|p| p.iter().map(|&x| reference1.smooth_f1_compact(x, 0.3).value).sum()),
+        ),
         ("texture", "one point", Box::new(|p| p.iter().map(|&x| f64::from(texture.value(x))).sum())),
         (
             "texture",

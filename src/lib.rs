@@ -36,7 +36,7 @@
 //! | combinations, fractal sums, gradients | [`texture::Texture`] | F2 − F1, Σ gain^i·C(lacunarity^i·x), analytic gradients |
 //! | a pixel's footprint (a filter width per sample) | [`texture::Texture::filtered8`], `filtered`, `filtered_values`, `filtered_grid`, `filtered_gradient8`; [`filter`] | unresolved octaves skipped, values blended towards their means; zero width = the point sample's bits |
 //! | the distance to the cell's border (even mortar) | [`SimdBorder::border`], [`SimdBorder::border8`], `border_slice`, `border_grid`, `border_in_cell`, `border_periodic`; [`Reference::border`] | with the neighbour's ID and the border's normal; Euclidean |
-//! | smooth F1 (rounded cells) | [`Reference::smooth_f1`], [`Reference::smooth_f1_in_cell`] | f64, certified to [`SMOOTH_TOLERANCE`], with its gradient; any metric |
+//! | smooth F1 (rounded cells) | compact: [`SimdSmooth::smooth`], [`SimdSmooth::smooth8`], `smooth_slice`, `smooth_grid`, `smooth_in_cell`; [`Reference::smooth_f1_compact`]; log-sum-exp: [`Reference::smooth_f1`] | C∞, with its gradient; compact: exact, points within F1 + 2s, lanes Euclidean; log-sum-exp: f64, certified to [`SMOOTH_TOLERANCE`]; any metric in f64 |
 //! | the n-sphere radius (circles that fit their cells) | [`SimdNSphere::n_sphere`], [`SimdNSphere::n_sphere8`], `n_sphere_slice`, `n_sphere_grid`, `n_sphere_in_cell`; [`Reference::n_sphere`] | half the distance from F1's point to its nearest, with both IDs; lanes Euclidean |
 //! | Perlin noise beside it | [`perlin::Perlin`] | one point or eight |
 //!
@@ -183,7 +183,7 @@ pub use definition::{Pattern, INVALID_ID};
 pub use reference::{Border, Features, NSphere, Reference, Smooth, SMOOTH_TOLERANCE};
 pub use simd::{
     by_eights, simd_level, Border32, Border8, Features32, Features8, Grid, NSphere32, NSphere8, Outputs, Period,
-    PeriodError, Point, Simd, SimdBorder, SimdNSphere, SizeError,
+    PeriodError, Point, Simd, SimdBorder, SimdNSphere, SimdSmooth, SizeError, Smooth32, Smooth8,
 };
 
 // The README's and the documentation pages' Rust blocks run as doc tests.

@@ -77,9 +77,11 @@ use wide::{f32x8, u32x8};
 
 pub mod nsphere;
 mod search;
+pub mod smooth;
 mod tiles;
 
 pub use nsphere::{NSphere32, NSphere8, SimdNSphere};
+pub use smooth::{SimdSmooth, Smooth32, Smooth8};
 
 use super::batch::in_cell;
 use super::best::Best;

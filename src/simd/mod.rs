@@ -159,7 +159,7 @@ mod tile;
 mod tiles;
 
 pub use batch::{by_eights, Grid, Point, SizeError, TILE};
-pub use border::{Border32, Border8, NSphere32, NSphere8, SimdBorder, SimdNSphere};
+pub use border::{Border32, Border8, NSphere32, NSphere8, SimdBorder, SimdNSphere, SimdSmooth, Smooth32, Smooth8};
 pub(crate) use coherent::GridRows;
 #[cfg(feature = "parallel")]
 pub(crate) use coherent::BAND;

@@ -2,8 +2,9 @@
 //! slices, grids and parallel batches give the single-point bits, agree
 //! with brute force, keep bad lanes to themselves, and hold on the hard
 //! cases (huge coordinates, lattice values, ties, NaN and ±inf); the grid
-//! tiles (the coherent path) give the per-sample kernel's bits; the border
-//! kernel in lanes gives the reference's result through every entry point.
+//! tiles (the coherent path) give the per-sample kernel's bits; the border,
+//! the n-sphere radius and compact smooth F1 in lanes give the reference's
+//! result through every entry point.
 //!
 //! A binary of its own, apart from `tests/suite/`, because CI runs it again
 //! in each SIMD build (default, AVX2, AVX-512: `wide` picks its code path at
@@ -20,3 +21,4 @@ mod hard_cases;
 mod levels;
 mod nsphere;
 mod simd;
+mod smooth;

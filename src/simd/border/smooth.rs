@@ -1,0 +1,474 @@
+//! # Compact smooth F1 in lanes
+//!
+//! The same quantity as
+//! [`Reference::smooth_f1_compact`](crate::Reference::smooth_f1_compact)
+//! (its module text defines it): S, the root of Σ_j φ((h_j − S)/s) = 1 over
+//! the feature points, with h_j = √(F_j² + s²) − s and φ a C∞ weight that
+//! is 0 from t = 1 on, so that only the points within √((h_1 + 2s)² − s²)
+//! (less than F1 + 2s) take part.
+//!
+//! ## How
+//! 1. **F1** with its delta and ID, from the kernel's own search.
+//! 2. **Every point within the reach**, per lane: the 3^d block in the
+//!    kernel's mirrored frame, then the shells around it until the block's
+//!    outside lies beyond every open lane's reach (the border's search,
+//!    [`SimdBorder`](super::SimdBorder), with a fixed radius in place of
+//!    its shrinking one). Each point's squared distance and delta are
+//!    kept per lane, in the order met, up to [`KEPT`] of them.
+//! 3. **The root**, per lane in f64: Newton's method from S = h_1, kept
+//!    inside the bracket (h_1 − s, h_1] by bisection, until a step is
+//!    below 10^−12 s; a lane with F1's point alone within reach needs no
+//!    step (S = h_1). The gradient is the weighted mean of the ∇h_j.
+//!
+//! A lane with more than [`KEPT`] points within reach (s well beyond the
+//! spacing of the points) is evaluated by the f64 reference at the lane's
+//! own position (its cell and its 24-bit fraction) and rounded to f32.
+//!
+//! ## Error
+//! S moves with each h_j by a weight between 0 and 1, the weights summing
+//! to 1, and h_j with F_j by at most 1: S is within the largest F_j error
+//! of the points that take part, 4ε(R + 1/S_p) with R the reach in user
+//! units, ε = 2^−24 and S_p the pattern's scale, plus the f32 rounding of
+//! S (`tests/lanes/smooth.rs` measures it against the reference).
+//!
+//! Every entry point runs the same operations per lane, so a sample gets
+//! the same bits through [`SimdSmooth::smooth`], [`SimdSmooth::smooth8`],
+//! the slices and the grids. Euclidean only, as the border. Bad input (NaN,
+//! ±∞, cells out of range) gives NaN and [`INVALID_ID`] in its own lane; a
+//! negative, infinite or NaN `s` gives them in every lane; `s = 0` gives F1
+//! as [`Simd::evaluate`] does, with ∇F1. In
+//! [`Mode::Window`] the 3^d block's points take part,
+//! and an empty block gives +∞ and [`INVALID_ID`].
+
+use wide::{f32x8, u32x8};
+
+use super::super::batch::in_cell;
+use super::super::best::Best;
+use super::super::generate::UNIT;
+use super::super::lanes::{Eight, Lanes, One, WIDEST};
+use super::super::locate::Located;
+use super::super::search::outside;
+use super::super::{by_eights, Grid, Outputs, Point, Simd, SizeError};
+use super::search::{CellAt, Frame};
+use super::SLACK;
+use crate::config::{Config, ConfigError, Metric, Mode};
+use crate::definition::INVALID_ID;
+use crate::reference::{shell, Reference, MAX_SHELLS};
+
+/// Points within reach kept per lane for the root; a lane with more is
+/// evaluated by the f64 reference.
+pub const KEPT: usize = 24;
+
+/// One sample's compact smooth F1 (user units), its gradient and F1's ID.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Smooth32<const D: usize> {
+    /// S: at most F1, more than F1 − 2s (NaN for bad input).
+    pub value: f32,
+    /// ∇S with respect to the sample's position.
+    pub gradient: [f32; D],
+    /// The ID of F1's point.
+    pub feature: u32,
+}
+
+impl<const D: usize> Smooth32<D> {
+    /// The result for bad input: NaN and [`INVALID_ID`].
+    pub const INVALID: Self = Smooth32 { value: f32::NAN, gradient: [f32::NAN; D], feature: INVALID_ID };
+}
+
+/// Eight samples' compact smooth F1, lane i the i-th sample.
+#[derive(Clone, Copy, Debug)]
+pub struct Smooth8<const D: usize> {
+    /// The values.
+    pub value: f32x8,
+    /// The gradients, per axis.
+    pub gradient: [f32x8; D],
+    /// The IDs of F1's points.
+    pub feature: u32x8,
+}
+
+impl<const D: usize> Smooth8<D> {
+    /// Lane `i` (0..8).
+    pub fn lane(&self, i: usize) -> Smooth32<D> {
+        Smooth32 {
+            value: self.value.to_array()[i],
+            gradient: self.gradient.map(|g| g.to_array()[i]),
+            feature: self.feature.to_array()[i],
+        }
+    }
+
+    /// Every lane.
+    pub fn lanes(&self) -> [Smooth32<D>; 8] {
+        std::array::from_fn(|i| self.lane(i))
+    }
+
+    fn from_lanes(lanes: &[Smooth32<D>; 8]) -> Self {
+        Smooth8 {
+            value: f32x8::from(lanes.map(|v| v.value)),
+            gradient: std::array::from_fn(|a| f32x8::from(lanes.map(|v| v.gradient[a]))),
+            feature: u32x8::from(lanes.map(|v| v.feature)),
+        }
+    }
+}
+
+/// Compact smooth F1, eight samples at a time (see the
+/// [module's text](self)). Euclidean only.
+///
+/// ```
+/// use worley::{Config, Reference, SimdSmooth};
+/// let smooth = SimdSmooth::<3>::new(Config::default()).unwrap();
+/// let x = [0.3, -2.0, 7.5];
+/// let got = smooth.smooth(x, 0.3);
+/// let want = Reference::<3>::new(Config::default()).unwrap().smooth_f1_compact(x, 0.3);
+/// assert_eq!(got.feature, want.feature);
+/// assert!((f64::from(got.value) - want.value).abs() < 1e-5);
+/// assert!(smooth.smooth([f64::NAN, 0.0, 0.0], 0.3).value.is_nan());
+/// ```
+#[derive(Clone, Debug)]
+pub struct SimdSmooth<const D: usize> {
+    /// F1 with its delta and ID.
+    first: Simd<D, 1>,
+    /// For lanes with more than [`KEPT`] points within reach.
+    reference: Reference<D>,
+}
+
+/// The points within reach, per lane in the order met: squared distance
+/// and delta (x − p), lane units; `count` may pass [`KEPT`] (then only the
+/// first [`KEPT`] are kept).
+struct Near<const D: usize> {
+    count: [usize; WIDEST],
+    d2: [[f32; KEPT]; WIDEST],
+    delta: [[[f32; D]; KEPT]; WIDEST],
+}
+
+impl<const D: usize> Near<D> {
+    fn new() -> Self {
+        Near { count: [0; WIDEST], d2: [[0.0; KEPT]; WIDEST], delta: [[[0.0; D]; KEPT]; WIDEST] }
+    }
+
+    /// One point, in the lanes of the bit mask `inside`.
+    #[inline(always)]
+    fn push<L: Lanes>(&mut self, inside: u32, d2: L::F, delta: &[L::F; D]) {
+        let mut d2s = [0f32; WIDEST];
+        L::f_store(d2, &mut d2s[..L::N]);
+        let mut deltas = [[0f32; WIDEST]; D];
+        for (out, v) in deltas.iter_mut().zip(delta) {
+            L::f_store(*v, &mut out[..L::N]);
+        }
+        let mut bits = inside;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let k = self.count[i];
+            if k < KEPT {
+                self.d2[i][k] = d2s[i];
+                self.delta[i][k] = std::array::from_fn(|a| deltas[a][i]);
+            }
+            self.count[i] = k + 1;
+        }
+    }
+}
+
+impl<const D: usize> SimdSmooth<D> {
+    /// Builds the evaluator (`config.order` is ignored).
+    ///
+    /// # Errors
+    /// [`ConfigError::BorderMetric`] unless the metric is Euclidean, or the
+    /// first other invalid field of `config`.
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        if !matches!(config.metric, Metric::Euclidean) {
+            return Err(ConfigError::BorderMetric(config.metric));
+        }
+        let config = Config { order: 1, ..config };
+        Ok(SimdSmooth { first: Simd::new(config, Outputs::IdsAndDeltas)?, reference: Reference::new(config)? })
+    }
+
+    /// The configuration (order 1).
+    pub fn config(&self) -> &Config {
+        self.first.config()
+    }
+
+    /// One sample with smoothness `s` (user units), through the one-lane
+    /// instantiation: the bits of its lane in [`SimdSmooth::smooth8`].
+    pub fn smooth(&self, x: [f64; D], s: f32) -> Smooth32<D> {
+        self.one(&self.first.locate::<One>(&[x]), s)
+    }
+
+    /// Eight samples, one per lane.
+    ///
+    /// ```
+    /// use worley::{Config, SimdSmooth};
+    /// let smooth = SimdSmooth::<2>::new(Config::default()).unwrap();
+    /// let x: [[f64; 2]; 8] = std::array::from_fn(|i| [i as f64 * 0.7, -1.25]);
+    /// assert_eq!(smooth.smooth8(&x, 0.2).lane(5), smooth.smooth(x[5], 0.2));
+    /// ```
+    pub fn smooth8(&self, x: &[[f64; D]; 8], s: f32) -> Smooth8<D> {
+        self.eight(&self.first.locate::<Eight>(x), s)
+    }
+
+    /// One sample given as a cell and the fraction within it, as
+    /// [`Simd::evaluate_in_cell`] takes it (bad input as there).
+    pub fn smooth_in_cell(&self, cell: [i64; D], fraction: [f32; D], s: f32) -> Smooth32<D> {
+        self.one(&in_cell::<One, D>(&[cell], &[fraction]), s)
+    }
+
+    /// Eight samples given as cells and fractions.
+    pub fn smooth8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8], s: f32) -> Smooth8<D> {
+        self.eight(&in_cell::<Eight, D>(cells, fractions), s)
+    }
+
+    /// Many points into a caller's buffer, eight at a time.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out` is shorter than `xs`; nothing is written.
+    pub fn smooth_slice<P: Point<D>>(&self, xs: &[P], s: f32, out: &mut [Smooth32<D>]) -> Result<(), SizeError> {
+        by_eights(xs, out, |block| self.smooth8(block, s).lanes())
+    }
+
+    /// Every point of a grid (axis 0 fastest), eight at a time.
+    ///
+    /// # Errors
+    /// [`SizeError`] if `out.len() != grid.len()`; nothing is written.
+    pub fn smooth_grid(&self, grid: &Grid<D>, s: f32, out: &mut [Smooth32<D>]) -> Result<(), SizeError> {
+        let needed = grid.len().ok_or(SizeError { needed: usize::MAX, given: out.len() })?;
+        if out.len() != needed {
+            return Err(SizeError { needed, given: out.len() });
+        }
+        grid.eights_into(0, out, |block| self.smooth8(block, s).lanes());
+        Ok(())
+    }
+
+    /// One located sample.
+    fn one(&self, at: &Located<One, D>, s: f32) -> Smooth32<D> {
+        let (best, _, raw) = self.first.dispatch_one(at);
+        let search = |reach, near: &mut Near<D>| self.first.near_points::<One>(at, reach, near);
+        self.lanes::<One>(at, &best, &raw, s, search)[0]
+    }
+
+    /// Eight located samples.
+    fn eight(&self, at: &Located<Eight, D>, s: f32) -> Smooth8<D> {
+        let (best, _, raw) = self.first.dispatch8_whole(at);
+        let search = |reach, near: &mut Near<D>| self.first.near_points8(at, reach, near);
+        let lanes = self.lanes::<Eight>(at, &best, &raw, s, search);
+        Smooth8::from_lanes(&std::array::from_fn(|i| lanes[i]))
+    }
+
+    /// The located lanes' values from the kernel's F1 (`best` finished in
+    /// user units, `raw` in lane units), `search` finding the points within
+    /// a reach ([`Simd::near_points`]).
+    #[inline(always)]
+    fn lanes<L: Lanes>(
+        &self,
+        at: &Located<L, D>,
+        best: &Best<L, D, 1>,
+        raw: &Best<L, D, 1>,
+        s: f32,
+        search: impl FnOnce(L::F, &mut Near<D>) -> u32,
+    ) -> [Smooth32<D>; WIDEST] {
+        let mut out = [Smooth32::INVALID; WIDEST];
+        if !(s >= 0.0 && s.is_finite()) {
+            return out;
+        }
+        let (mut f1, mut id, mut rank) = ([0f32; WIDEST], [INVALID_ID; WIDEST], [0f32; WIDEST]);
+        L::f_store(best.rank[0], &mut f1[..L::N]);
+        L::u_store(best.id[0], &mut id[..L::N]);
+        L::f_store(raw.rank[0], &mut rank[..L::N]);
+        let mut delta = [[0f32; WIDEST]; D];
+        for (out, v) in delta.iter_mut().zip(&best.delta[0]) {
+            L::f_store(*v, &mut out[..L::N]);
+        }
+        let mut open = [false; WIDEST];
+        for i in 0..L::N {
+            if f1[i].is_nan() {
+                continue;
+            }
+            if f1[i].is_infinite() {
+                // Window mode with an empty 3^d block.
+                out[i] = Smooth32 { value: f32::INFINITY, gradient: [f32::NAN; D], feature: INVALID_ID };
+            } else if s == 0.0 {
+                let g = |a: usize| if f1[i] > 0.0 { delta[a][i] / f1[i] } else { 0.0 };
+                out[i] = Smooth32 { value: f1[i], gradient: std::array::from_fn(g), feature: id[i] };
+            } else {
+                open[i] = true;
+            }
+        }
+        if !open.contains(&true) {
+            return out;
+        }
+        let unit = self.first.pattern().scale() * f64::from(UNIT);
+        let sl = f64::from(s) * unit;
+        // Each open lane's squared reach (lane units) with some slack: a
+        // point beyond the exact reach has weight 0, so more is harmless.
+        let mut reach = [-1f32; WIDEST];
+        for i in (0..L::N).filter(|&i| open[i]) {
+            let h1 = (f64::from(rank[i]) + sl * sl).sqrt() - sl;
+            reach[i] = (((h1 + 2.0 * sl).powi(2) - sl * sl) * f64::from(SLACK * SLACK)) as f32;
+        }
+        let mut near = Near::new();
+        let uncertified = search(L::f_load(&reach[..L::N]), &mut near);
+        let cells = at.cells_i64();
+        for i in (0..L::N).filter(|&i| open[i]) {
+            out[i] = if uncertified & (1 << i) != 0 {
+                Smooth32::INVALID
+            } else if near.count[i] > KEPT {
+                let fraction: [f64; D] = std::array::from_fn(|a| {
+                    let mut f = [0f32; WIDEST];
+                    L::f_store(at.f[a], &mut f[..L::N]);
+                    f64::from(f[i]) / f64::from(UNIT)
+                });
+                let cell: [i64; D] = std::array::from_fn(|a| cells[a][i]);
+                let r = self.reference.smooth_f1_compact_in_cell(cell, fraction, f64::from(s));
+                Smooth32 { value: r.value as f32, gradient: r.gradient.map(|g| g as f32), feature: r.feature }
+            } else {
+                let n = near.count[i];
+                let (value, gradient) = root(&near.d2[i][..n], &near.delta[i][..n], sl);
+                Smooth32 { value: (value / unit) as f32, gradient: gradient.map(|g| g as f32), feature: id[i] }
+            };
+        }
+        out
+    }
+}
+
+/// S (lane units) and ∇S from the points within reach (squared distances
+/// and deltas, lane units, at least F1's point), `sl` the smoothness in
+/// lane units.
+fn root<const D: usize>(d2: &[f32], delta: &[[f32; D]], sl: f64) -> (f64, [f64; D]) {
+    let mut roots = [0f64; KEPT];
+    for (r, &d) in roots.iter_mut().zip(d2) {
+        *r = (f64::from(d) + sl * sl).sqrt();
+    }
+    let roots = &roots[..d2.len()];
+    let h1 = roots.iter().fold(f64::INFINITY, |m, &r| m.min(r - sl));
+    let mut value = h1;
+    if d2.len() > 1 {
+        // Newton on G(v) = Σ φ((h_j − v)/s) − 1, increasing in v, with
+        // G(h1 − s) = −1 and G(h1) ≥ 0; a step that leaves the bracket
+        // bisects it instead.
+        let (mut lo, mut hi) = (h1 - sl, h1);
+        for _ in 0..64 {
+            let (mut g, mut slope) = (-1.0, 0.0);
+            for &r in roots {
+                let t = (r - sl - value) / sl;
+                if t < 1.0 {
+                    let e = (1.0 - 1.0 / (1.0 - t)).exp();
+                    g += e;
+                    slope += e / ((1.0 - t) * (1.0 - t));
+                }
+            }
+            if g >= 0.0 {
+                hi = value;
+            } else {
+                lo = value;
+            }
+            if g == 0.0 {
+                break;
+            }
+            let mut next = value - g * sl / slope;
+            if !(next > lo && next < hi) {
+                next = 0.5 * (lo + hi);
+            }
+            let step = (next - value).abs();
+            value = next;
+            if step <= 1e-12 * sl {
+                break;
+            }
+        }
+    }
+    let mut weight = 0.0;
+    let mut gradient = [0.0; D];
+    for (&r, v) in roots.iter().zip(delta) {
+        let t = (r - sl - value) / sl;
+        if t < 1.0 {
+            let w = (1.0 - 1.0 / (1.0 - t)).exp() / ((1.0 - t) * (1.0 - t));
+            weight += w;
+            for (g, &va) in gradient.iter_mut().zip(v) {
+                *g += w * f64::from(va) / r;
+            }
+        }
+    }
+    (value, gradient.map(|g| g / weight))
+}
+
+impl<const D: usize> Simd<D, 1> {
+    /// [`Simd::near_points`] in eight lanes through its AVX2 copy where
+    /// this build lacks AVX2 and the CPU has it, as the border's search
+    /// runs (the same operations, so the same bits).
+    #[inline(always)]
+    fn near_points8(&self, at: &Located<Eight, D>, reach: f32x8, near: &mut Near<D>) -> u32 {
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if super::super::runtime_avx2() {
+            // SAFETY: `near_points_avx2` requires AVX2 and nothing else,
+            // and `runtime_avx2` has just seen the CPU report it.
+            #[allow(unsafe_code)]
+            return unsafe { self.near_points_avx2(at, reach, near) };
+        }
+        self.near_points::<Eight>(at, reach, near)
+    }
+
+    /// [`Simd::near_points`] compiled with AVX2 enabled (see
+    /// [`Simd::dispatch_avx2`]).
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+    #[target_feature(enable = "avx2")]
+    fn near_points_avx2(&self, at: &Located<Eight, D>, reach: f32x8, near: &mut Near<D>) -> u32 {
+        self.near_points::<Eight>(at, reach, near)
+    }
+
+    /// Every point nearer than `reach` (squared, lane units; negative for
+    /// lanes left out) per lane, into `near`; returns the bit mask of lanes
+    /// whose reach passed [`MAX_SHELLS`] (never seen for valid input: their
+    /// result is NaN).
+    #[inline(always)]
+    fn near_points<L: Lanes>(&self, at: &Located<L, D>, reach: L::F, near: &mut Near<D>) -> u32 {
+        let mut open = L::le(L::f(0.0), reach);
+        let frame = Frame::<L, D>::new(at);
+        for offset in &self.block {
+            let c = frame.cell(offset);
+            let needs = L::and(open, L::le(c.rank, reach));
+            if L::any(needs) {
+                self.near_cell::<L>(&c, needs, reach, near);
+            }
+        }
+        if self.config.mode == Mode::Window {
+            return 0;
+        }
+        let cell = at.cells_i64();
+        for r in 1..=MAX_SHELLS {
+            let edge = outside::<L, D>(&at.f, r as f32 * UNIT);
+            open = L::and(open, L::le(L::mul(edge, edge), reach));
+            if !L::any(open) || r == MAX_SHELLS {
+                break;
+            }
+            for offset in shell::<D>(r + 1) {
+                let c = Frame::<L, D>::far_cell(at, &cell, &offset);
+                let needs = L::and(open, L::le(c.rank, reach));
+                if L::any(needs) {
+                    self.near_cell::<L>(&c, needs, reach, near);
+                }
+            }
+        }
+        L::bits(open)
+    }
+
+    /// The points of cell `c` nearer than `reach`, in the lanes of `needs`.
+    #[inline(always)]
+    fn near_cell<L: Lanes>(&self, c: &CellAt<L, D>, needs: L::M, reach: L::F, near: &mut Near<D>) {
+        let h = self.hash::<L>(c.terms);
+        let top = self.population::<L>(h);
+        for p in &self.points {
+            let active = L::and(needs, L::lt(self.key::<L>(p), top));
+            if !L::any(active) {
+                break;
+            }
+            let q = Self::coordinates_of::<L>(p, h);
+            let mut delta = [L::f(0.0); D];
+            let mut d2 = L::f(0.0);
+            for (a, v) in delta.iter_mut().enumerate() {
+                *v = L::sub(c.shifted[a], L::u24_to_f(q[a]));
+                d2 = L::add(d2, L::mul(*v, *v));
+            }
+            let inside = L::bits(L::and(active, L::lt(d2, reach)));
+            if inside != 0 {
+                near.push::<L>(inside, d2, &delta);
+            }
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! Compact smooth F1 in lanes (`SimdSmooth`) against the f64 reference
+//! (`Reference::smooth_f1_compact`, itself held to brute force in
+//! `tests/suite/compact.rs`), the same bits through every entry point, and
+//! bad lanes kept to themselves.
+
+use worley::{Config, ConfigError, Grid, Metric, Mode, Outputs, Reference, Simd, SimdSmooth, Smooth32, INVALID_ID};
+use worley_harness::{chunked, sample_point};
+
+/// The stated bound: S moves by at most the largest F_j error of the
+/// points within the reach R, 4ε(R + 1/S_p), plus S's own f32 rounding.
+fn bound(reach: f64, value: f64, inv_scale: f64) -> f64 {
+    2.0 * f64::from(f32::EPSILON) * (reach + inv_scale) + f64::from(f32::EPSILON) * value.abs()
+}
+
+/// Largest value error over the bound, largest gradient error, and how
+/// many values were +∞.
+fn agrees<const D: usize>(config: Config, s: f32, seed: u64, n: usize, range: f64) -> (f64, f64, usize) {
+    let reference = Reference::<D>::new(config).unwrap();
+    let simd = SimdSmooth::<D>::new(config).unwrap();
+    let inv_scale = 1.0 / reference.pattern().scale();
+    let points: Vec<[f64; D]> = (0..n).map(|i| sample_point::<D>(seed, i, range)).collect();
+    let mut got = vec![Smooth32::INVALID; n];
+    simd.smooth_slice(&points, s, &mut got).unwrap();
+    let (mut worst, mut worst_gradient, mut unbounded) = (0f64, 0f64, 0);
+    let sd = f64::from(s);
+    for (x, g) in points.iter().zip(&got) {
+        let want = reference.smooth_f1_compact(*x, sd);
+        assert_eq!(g.feature, want.feature, "{D}D s {s} at {x:?}: {g:?} against {want:?}");
+        if want.value.is_infinite() {
+            unbounded += 1;
+            assert_eq!(f64::from(g.value), want.value, "{D}D at {x:?}");
+            continue;
+        }
+        let f1 = reference.evaluate(*x).distance[0];
+        let h1 = (f1 * f1 + sd * sd).sqrt() - sd;
+        let reach = ((h1 + 2.0 * sd).powi(2) - sd * sd).sqrt();
+        let (error, allowed) = ((f64::from(g.value) - want.value).abs(), bound(reach, want.value, inv_scale));
+        assert!(error <= allowed, "{D}D s {s} at {x:?}: {} against {} (bound {allowed:e})", g.value, want.value);
+        worst = worst.max(error / allowed);
+        for a in 0..D {
+            worst_gradient = worst_gradient.max((f64::from(g.gradient[a]) - want.gradient[a]).abs());
+        }
+    }
+    (worst, worst_gradient, unbounded)
+}
+
+#[test]
+fn simd_smooth_agrees_with_the_reference_in_every_dimension() {
+    let c = |seed, density| Config { seed, density, ..Config::default() };
+    let window = |seed, density| Config { mode: Mode::Window, ..c(seed, density) };
+    let runs = chunked(8, |range| {
+        range
+            .map(|run| match run {
+                0 => ("2D s 0.1", agrees::<2>(c(0, 5.0), 0.1, 1, 100_000, 1000.0)),
+                1 => ("2D s 0.3", agrees::<2>(c(0, 5.0), 0.3, 2, 100_000, 1000.0)),
+                2 => ("3D s 0.1", agrees::<3>(c(0, 5.0), 0.1, 3, 50_000, 1000.0)),
+                3 => ("3D s 0.3", agrees::<3>(c(0, 5.0), 0.3, 4, 50_000, 1000.0)),
+                4 => ("4D s 0.3", agrees::<4>(c(0, 5.0), 0.3, 5, 10_000, 1000.0)),
+                // Sparse points per cell: the reach spans shells of cells.
+                5 => ("3D λ 0.5 s 0.3", agrees::<3>(c(7, 0.5), 0.3, 6, 20_000, 1000.0)),
+                // More points within reach than a lane keeps: the f64
+                // reference's value, rounded.
+                6 => ("3D s 1.5", agrees::<3>(c(0, 5.0), 1.5, 7, 3_000, 1000.0)),
+                // Windows that hold no point: +∞, as the reference says.
+                _ => ("2D window λ 0.3 s 0.3", agrees::<2>(window(2, 0.3), 0.3, 8, 20_000, 100.0)),
+            })
+            .collect::<Vec<_>>()
+    });
+    for (name, (worst, gradient, unbounded)) in runs.into_iter().flatten() {
+        println!(
+            "{name}: worst value error {worst:.3} of the bound, worst gradient error {gradient:.2e}, {unbounded} +∞"
+        );
+        // The gradient is the weighted mean of unit-length vectors whose
+        // weights move with the values' f32 error relative to s.
+        assert!(gradient < 2e-4, "{name}: gradient error {gradient}");
+        if name.contains("window") {
+            assert!(unbounded > 0, "{name}: no empty window, so +∞ went untested");
+        }
+    }
+}
+
+#[test]
+fn simd_smooth_gives_the_same_bits_through_every_entry_point() {
+    fn check<const D: usize>(config: Config, s: f32) {
+        let simd = SimdSmooth::<D>::new(config).unwrap();
+        let grid =
+            Grid { origin: [-3.3; D], step: [0.37; D], size: std::array::from_fn(|a| if a < 2 { 13 } else { 3 }) };
+        let mut out = vec![Smooth32::INVALID; grid.len().unwrap()];
+        simd.smooth_grid(&grid, s, &mut out).unwrap();
+        let bits = |v: &Smooth32<D>| (v.value.to_bits(), v.gradient.map(f32::to_bits), v.feature);
+        for (i, g) in out.iter().enumerate() {
+            assert_eq!(bits(g), bits(&simd.smooth(grid.point(i), s)), "{D}D grid sample {i}");
+        }
+        for (c, chunk) in out.chunks(8).enumerate().take(20) {
+            if chunk.len() < 8 {
+                break;
+            }
+            let x: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(c * 8 + i));
+            let eight = simd.smooth8(&x, s);
+            let cells: [[i64; D]; 8] = std::array::from_fn(|i| x[i].map(|v| v.floor() as i64));
+            let fractions: [[f32; D]; 8] = std::array::from_fn(|i| x[i].map(|v| (v - v.floor()) as f32));
+            let in_cell = simd.smooth8_in_cell(&cells, &fractions, s);
+            for i in 0..8 {
+                assert_eq!(bits(&eight.lane(i)), bits(&chunk[i]), "{D}D eight, lane {i}");
+                assert_eq!(
+                    bits(&in_cell.lane(i)),
+                    bits(&simd.smooth_in_cell(cells[i], fractions[i], s)),
+                    "{D}D in cell"
+                );
+            }
+        }
+    }
+    let config = Config { density: 2.0, seed: 11, ..Config::default() };
+    check::<2>(config, 0.3);
+    check::<3>(config, 0.1);
+    check::<3>(config, 1.5);
+    check::<4>(config, 0.3);
+    check::<3>(Config { mode: Mode::Window, ..config }, 0.3);
+}
+
+#[test]
+fn simd_smooth_keeps_bad_lanes_to_themselves_and_refuses_other_metrics() {
+    let simd = SimdSmooth::<3>::new(Config::default()).unwrap();
+    let f1 = Simd::<3, 1>::new(Config::default(), Outputs::Ids).unwrap();
+    let mut x: [[f64; 3]; 8] = std::array::from_fn(|i| [i as f64 * 0.61, 2.5, -7.25]);
+    // s = 0 is F1 itself, bit for bit.
+    let zero = simd.smooth8(&x, 0.0);
+    let want = f1.evaluate8(&x);
+    for i in 0..8 {
+        assert_eq!(zero.lane(i).value.to_bits(), want.distance[0].to_array()[i].to_bits());
+        assert_eq!(zero.lane(i).feature, want.id[0].to_array()[i]);
+    }
+    let good = simd.smooth8(&x, 0.3);
+    x[2][1] = f64::NAN;
+    x[5][0] = f64::INFINITY;
+    x[6][2] = -1e300;
+    let mixed = simd.smooth8(&x, 0.3);
+    for i in 0..8 {
+        let v = mixed.lane(i);
+        if [2, 5, 6].contains(&i) {
+            assert!(v.value.is_nan() && v.gradient.iter().all(|g| g.is_nan()) && v.feature == INVALID_ID, "lane {i}");
+        } else {
+            assert_eq!(v, good.lane(i), "lane {i} changed with its neighbours");
+            assert!(v.value.is_finite(), "lane {i}: {v:?}");
+        }
+    }
+    for s in [-0.1, f32::NAN, f32::INFINITY] {
+        assert!(simd.smooth8(&x, s).lanes().iter().all(|v| v.value.is_nan() && v.feature == INVALID_ID), "s {s}");
+    }
+    for metric in [Metric::Manhattan, Metric::Chebyshev, Metric::Minkowski(3.0)] {
+        let config = Config { metric, ..Config::default() };
+        assert_eq!(SimdSmooth::<3>::new(config).unwrap_err(), ConfigError::BorderMetric(metric));
+    }
+}
