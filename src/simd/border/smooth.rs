@@ -359,18 +359,14 @@ fn root<const D: usize>(d2: &[f32], delta: &[[f32; D]], sl: f64) -> (f64, [f64; 
             } else {
                 lo = value;
             }
-            if g == 0.0 {
+            let step = g * sl / slope;
+            if step.abs() <= 1e-12 * sl {
+                // Converged: the last step may be below the value's ulp.
+                value -= step;
                 break;
             }
-            let mut next = value - g * sl / slope;
-            if !(next > lo && next < hi) {
-                next = 0.5 * (lo + hi);
-            }
-            let step = (next - value).abs();
-            value = next;
-            if step <= 1e-12 * sl {
-                break;
-            }
+            let next = value - step;
+            value = if next > lo && next < hi { next } else { 0.5 * (lo + hi) };
         }
     }
     let mut weight = 0.0;
