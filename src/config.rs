@@ -256,8 +256,10 @@ pub enum ConfigError {
     Bump(f64),
     /// The distance to the cell's border was asked under a metric other
     /// than the Euclidean one, whose bisectors are not planes; or the
-    /// n-sphere radius in lanes ([`crate::SimdNSphere`]), which finds F1's
-    /// point as the border does (the f64 reference takes every metric).
+    /// n-sphere radius or compact smooth F1 in lanes
+    /// ([`crate::SimdNSphere`], [`crate::SimdSmooth`]), which search around
+    /// F1 in the border's Euclidean frame (the f64 reference takes every
+    /// metric for both).
     BorderMetric(Metric),
 }
 
@@ -280,7 +282,7 @@ impl fmt::Display for ConfigError {
             }
             ConfigError::BorderMetric(m) => write!(
                 f,
-                "the distance to the cell border (and the SIMD n-sphere radius) is defined for the Euclidean metric only, not {m}: its bisectors are not planes"
+                "the distance to the cell border (and, in lanes, the n-sphere radius and smooth F1, which search in its frame) is defined for the Euclidean metric only, not {m}: its bisectors are not planes"
             ),
         }
     }

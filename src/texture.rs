@@ -1,5 +1,6 @@
-//! Textures on the basis: combinations of F1..Fn or the distance to the
-//! cell's border ([`Combination::Border`]), fractal sums, their analytic
+//! Textures on the basis: combinations of F1..Fn, the distance to the
+//! cell's border ([`Combination::Border`]) or compact smooth F1
+//! ([`Combination::Smooth`]), fractal sums, their analytic
 //! gradients, a periodic (tileable) domain, and normal perturbation for bump
 //! mapping, all on the 8-lane kernel.
 //!
@@ -24,7 +25,7 @@ use wide::f32x8;
 
 use crate::config::{Config, Mode};
 use crate::filter::BlendCurve;
-use crate::simd::{Border8, Features8, Outputs, Period, PeriodError, Simd, SimdBorder};
+use crate::simd::{Border8, Features8, Outputs, Period, PeriodError, Simd, SimdBorder, SimdSmooth, Smooth8};
 
 mod batch;
 mod combination;
@@ -60,6 +61,7 @@ pub struct Sample {
 /// | F_k, Σ c_k·F_k with c_k ≥ 0, F1·F2, F3² − F2² | [0, ∞): no upper bound (a Poisson process has arbitrarily empty regions), ≥ 0 because F1 ≤ F2 ≤ … | the 0.1 % and 99.9 % quantiles of one octave in [`DEFAULT_RANGES`] (`worley ranges` measured them; a test re-measures them) |
 /// | F2 − F1 | [0, ∞); 0 exactly on cell borders | as above |
 /// | [`Combination::Border`] | [0, ∞); at least (F2 − F1)/2 | [`Texture::measure_range`] |
+/// | [`Combination::Smooth`] with smoothness s | (−s, ∞): at most F1, above √(F1² + s²) − 2s | [`Texture::measure_range`] |
 /// | a fractal sum of n octaves | Σ a_i·C_i with a_i = gain^i: at least Σ a_i·lo_i, and at least 1 − n·0.1 % of samples at most Σ a_i·hi_i (a union bound on the octaves' quantiles) | [`Texture::measure_range`] |
 ///
 /// NaN marks bad input only. For display, [`Texture::measure_range`] gives
@@ -71,6 +73,8 @@ pub struct Texture<const D: usize, const N: usize> {
     deltas: Simd<D, N>,
     /// The border kernel, for [`Combination::Border`].
     border: Option<SimdBorder<D>>,
+    /// Compact smooth F1 and its smoothness, for [`Combination::Smooth`].
+    smooth: Option<(SimdSmooth<D>, f32)>,
     combination: Combination,
     fractal: Fractal,
     period: Option<Period<D>>,
@@ -119,6 +123,11 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             Combination::Border => Some(SimdBorder::new(config)?),
             _ => None,
         };
+        let smooth = match combination {
+            Combination::Smooth(_) if period.is_some() => return Err(TextureError::SmoothPeriod),
+            Combination::Smooth(s) => Some((SimdSmooth::new(config)?, s)),
+            _ => None,
+        };
         let mut octaves = Vec::new();
         let (mut frequency, mut amplitude) = (1.0f64, 1.0f32);
         for _ in 0..fractal.octaves {
@@ -146,6 +155,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             values,
             deltas,
             border,
+            smooth,
             combination,
             fractal,
             period,
@@ -308,6 +318,9 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     #[inline(always)]
     fn octave_value<const ONE: bool>(&self, x: &[[f64; D]; 8], i: usize) -> f32x8 {
         let (frequency, _, period) = self.octaves[i];
+        if let Some((smooth, s)) = &self.smooth {
+            return self.smooths::<ONE>(smooth, *s, x, frequency).value;
+        }
         match &self.border {
             Some(border) => self.borders::<ONE>(border, x, frequency, period).distance,
             None => self.combination.value(&self.features::<ONE>(&self.values, x, frequency, period).distance),
@@ -353,7 +366,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let mean = match &self.combination {
             Combination::Linear(c) => c.iter().enumerate().map(|(k, &ck)| f64::from(ck) * moment(k + 1, 1.0)).sum(),
             Combination::SquareDifference => moment(3, 2.0) - moment(2, 2.0),
-            Combination::Product | Combination::Border => return None,
+            Combination::Product | Combination::Border | Combination::Smooth(_) => return None,
         };
         Some(mean as f32)
     }
@@ -389,6 +402,30 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             ((y, None), true) => Border8::splat(&border.border(y[0])),
             ((y, Some(p)), false) => border.border8_periodic(&y, &p),
             ((y, None), false) => border.border8(&y),
+        }
+    }
+
+    /// The eight lanes' compact smooth F1 at `frequency · x` (never
+    /// periodic: such textures are refused); with `ONE`, lane 0's in one
+    /// lane, spread.
+    #[inline(always)]
+    fn smooths<const ONE: bool>(
+        &self,
+        smooth: &SimdSmooth<D>,
+        s: f32,
+        x: &[[f64; D]; 8],
+        frequency: f64,
+    ) -> Smooth8<D> {
+        let (y, _) = self.octave(x, frequency, None);
+        if ONE {
+            let v = smooth.smooth(y[0], s);
+            Smooth8 {
+                value: f32x8::splat(v.value),
+                gradient: v.gradient.map(f32x8::splat),
+                feature: wide::u32x8::splat(v.feature),
+            }
+        } else {
+            smooth.smooth8(&y, s)
         }
     }
 

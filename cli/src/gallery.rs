@@ -126,6 +126,14 @@ pub fn gallery(dir: &Path, tile: usize, show_progress: bool, exr: bool) -> Resul
             }),
         ),
         (
+            "smooth_f1_and_n_sphere.png",
+            Box::new(|| {
+                let config = Config { seed: base.seed, density: base.density, ..Config::default() };
+                let tiles = render::smooth_and_dots(config, &base.view(), 1.6, &[0.15, 0.4])?;
+                Ok(sheet(&tiles, 2, 2))
+            }),
+        ),
+        (
             "tileable_2x2.png",
             Box::new(|| {
                 let a = with(&|a| {

@@ -356,3 +356,52 @@ pub fn border_and_crackle(
     let column = |k: usize| pairs.iter().map(|p| p[k]).collect::<Vec<f32>>();
     Ok(vec![image(column(0), &heat), image(column(1), &heat), image(column(0), &lines), image(column(1), &lines)])
 }
+
+/// F1 beside compact smooth F1 at the smoothnesses `s` (user units), then
+/// the n-sphere's dots, on the same points (2D, the lanes): the first
+/// tiles as a colour map over [0, `range`] user units, the last with a dot
+/// of F1's point's colour wherever F1 is below the n-sphere radius (circles
+/// that fit their cells and never overlap). Returns the tiles in that order.
+///
+/// # Errors
+/// A configuration the lanes refuse (another metric than the Euclidean),
+/// or an image with no pixels.
+pub fn smooth_and_dots(
+    config: worley::Config,
+    view: &View,
+    range: f32,
+    s: &[f32],
+) -> Result<Vec<(Vec<f32>, Rgb)>, String> {
+    let grid = view.grid::<2>();
+    let n = grid.len().filter(|&n| n > 0 && n <= 1 << 28).ok_or("the image must have 1 to 2^28 pixels")?;
+    let smooth = worley::SimdSmooth::<2>::new(config).map_err(|e| e.to_string())?;
+    let spheres = worley::SimdNSphere::<2>::new(config).map_err(|e| e.to_string())?;
+    let points: Vec<[f64; 2]> = (0..n).map(|i| grid.point(i)).collect();
+    let smoothed = |s: f32| {
+        let mut out = vec![worley::Smooth32::INVALID; n];
+        smooth.smooth_slice(&points, s, &mut out).map_err(|e| e.to_string())?;
+        Ok::<_, String>(out)
+    };
+    let image =
+        |values: Vec<f32>, pixels: Vec<[u8; 3]>| (values, Rgb { width: view.width, height: view.height, pixels });
+    let heat = |values: Vec<f32>| {
+        let pixels = values.iter().map(|&v| ColourMap::Heat.colour((v / range).clamp(0.0, 1.0))).collect();
+        image(values, pixels)
+    };
+    // s = 0 is F1 itself.
+    let f1 = smoothed(0.0)?;
+    let mut tiles = vec![heat(f1.iter().map(|v| v.value).collect())];
+    for &s in s {
+        tiles.push(heat(smoothed(s)?.iter().map(|v| v.value).collect()));
+    }
+    let mut radii = vec![worley::NSphere32::INVALID; n];
+    spheres.n_sphere_slice(&points, &mut radii).map_err(|e| e.to_string())?;
+    let ratio: Vec<f32> = f1.iter().zip(&radii).map(|(f, r)| f.value / r.radius).collect();
+    let pixels = ratio
+        .iter()
+        .zip(&radii)
+        .map(|(&q, r)| if q < 1.0 { id_colour(r.feature).map(crate::picture::to_byte) } else { [236, 230, 218] })
+        .collect();
+    tiles.push(image(ratio, pixels));
+    Ok(tiles)
+}

@@ -206,6 +206,38 @@ fn a_border_render_matches_the_library_and_refuses_other_metrics() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `--combo smooth:S`: compact smooth F1 as the library's lanes compute it,
+/// bit for bit; a bad smoothness, a period and other metrics are refused
+/// with one line and exit code 2.
+#[test]
+fn a_smooth_render_matches_the_library_and_refuses_what_it_cannot_do() {
+    let dir = scratch("smooth");
+    let pfm = dir.join("smooth.pfm");
+    let args =
+        ["render", "--dim", "2", "--combo", "smooth:0.3", "--extent", "8", "--size", "32x32", "--png", "-", "--pfm"];
+    let out = worley(&[&args[..], &[pfm.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (w, _, values) = from_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+    let smooth = worley::SimdSmooth::<2>::new(Config::default()).unwrap();
+    for j in 0..32 {
+        for i in 0..32 {
+            let want = smooth.smooth(pixel([0.0, 0.0], 8.0, w, i, j), 0.3).value;
+            assert_eq!(values[j * w + i].to_bits(), want.to_bits(), "pixel ({i}, {j})");
+        }
+    }
+    for (bad, words) in [
+        (&["--combo", "smooth:-1"][..], "smoothness"),
+        (&["--combo", "smooth:0.3", "--period", "4"][..], "does not tile"),
+        (&["--combo", "smooth:0.3", "--metric", "manhattan"][..], "Euclidean"),
+    ] {
+        let refused = worley(&[&["render", "--png", "-"][..], bad].concat());
+        assert_eq!(refused.status.code(), Some(2), "{bad:?}");
+        let said = String::from_utf8_lossy(&refused.stderr);
+        assert!(said.contains(words) && said.trim().lines().count() == 1, "{bad:?}: {said}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn random_combinations_print_their_coefficients() {
     let dir = scratch("combos");

@@ -1,6 +1,6 @@
 //! How F1..Fn are combined into one value ([`Combination`]): the
-//! chapter's combinations, any weighted sum, the border distance, and
-//! their names on the command line.
+//! chapter's combinations, any weighted sum, the border distance, compact
+//! smooth F1, and their names on the command line.
 
 use wide::f32x8;
 
@@ -20,6 +20,11 @@ pub enum Combination {
     /// where F2 − F1 widens between close pairs. Euclidean only; its
     /// gradient is the border plane's normal.
     Border,
+    /// Compact smooth F1 with smoothness `s` (a length in the octave's
+    /// coordinates: user units at the first octave, cells for a periodic
+    /// texture, which does not take it yet) ([`SimdSmooth`](crate::SimdSmooth)):
+    /// rounded cells, C∞, with an analytic gradient. Euclidean only.
+    Smooth(f32),
 }
 
 impl Combination {
@@ -41,15 +46,17 @@ impl Combination {
             Combination::Linear(c) => c.len(),
             Combination::Product => 2,
             Combination::SquareDifference => 3,
-            Combination::Border => 1,
+            Combination::Border | Combination::Smooth(_) => 1,
         }
     }
 
-    /// A short name, e.g. `F2-F1`, `0.5F1+2F3`, `F1*F2`, `border`.
+    /// A short name, e.g. `F2-F1`, `0.5F1+2F3`, `F1*F2`, `border`,
+    /// `smooth:0.3`.
     pub fn name(&self) -> String {
         match self {
             Combination::Product => "F1*F2".into(),
             Combination::Border => "border".into(),
+            Combination::Smooth(v) => format!("smooth:{v}"),
             Combination::SquareDifference => "F3^2-F2^2".into(),
             Combination::Linear(c) => {
                 let mut s = String::new();
@@ -75,6 +82,11 @@ impl Combination {
     }
 
     pub(super) fn validate(&self, compiled: usize) -> Result<(), TextureError> {
+        if let Combination::Smooth(v) = *self
+            && !(v >= 0.0 && v.is_finite())
+        {
+            return Err(TextureError::Smoothness(v));
+        }
         if let Combination::Linear(c) = self {
             if c.is_empty() {
                 return Err(TextureError::NoCoefficients);
@@ -89,13 +101,14 @@ impl Combination {
         Ok(())
     }
 
-    /// The combination of distances, in lanes. [`Combination::Border`] is
-    /// not a function of distances: textures evaluate it through their
-    /// [`SimdBorder`](crate::SimdBorder) and never call this for it (NaN if they did).
+    /// The combination of distances, in lanes. [`Combination::Border`] and
+    /// [`Combination::Smooth`] are not functions of distances: textures
+    /// evaluate them through their [`SimdBorder`](crate::SimdBorder) and
+    /// [`SimdSmooth`](crate::SimdSmooth) and never call this for them (NaN if they did).
     #[inline(always)]
     pub(super) fn value<const N: usize>(&self, f: &[f32x8; N]) -> f32x8 {
         match self {
-            Combination::Border => f32x8::splat(f32::NAN),
+            Combination::Border | Combination::Smooth(_) => f32x8::splat(f32::NAN),
             Combination::Linear(c) => {
                 let mut v = f32x8::splat(0.0);
                 for (ck, fk) in c.iter().zip(f) {
@@ -109,11 +122,12 @@ impl Combination {
     }
 
     /// d(combination)/d(F_k) for each k, in lanes (none for
-    /// [`Combination::Border`], whose gradient is its plane's normal).
+    /// [`Combination::Border`] and [`Combination::Smooth`], whose gradients
+    /// come from their kernels).
     pub(super) fn weights<const N: usize>(&self, f: &[f32x8; N]) -> [f32x8; N] {
         let mut w = [f32x8::splat(0.0); N];
         match self {
-            Combination::Border => {}
+            Combination::Border | Combination::Smooth(_) => {}
             Combination::Linear(c) => {
                 for (wk, ck) in w.iter_mut().zip(c) {
                     *wk = f32x8::splat(*ck);
@@ -135,11 +149,18 @@ impl Combination {
 impl std::str::FromStr for Combination {
     type Err = String;
 
-    /// `F1*F2`, `F3^2-F2^2`, `border`, or a linear sum of terms `[c]F<k>`
-    /// such as `F2-F1`, `0.5F1+2F3`, `-1.5*F2+F4` (k from 1 to 16).
+    /// `F1*F2`, `F3^2-F2^2`, `border`, `smooth:<s>` (compact smooth F1,
+    /// e.g. `smooth:0.3`), or a linear sum of terms `[c]F<k>` such as
+    /// `F2-F1`, `0.5F1+2F3`, `-1.5*F2+F4` (k from 1 to 16).
     fn from_str(s: &str) -> Result<Self, String> {
         let t: String = s.chars().filter(|c| !c.is_whitespace()).collect();
-        let usage = "use F1*F2, F3^2-F2^2, border, or a sum of terms [c]Fk such as F2-F1 or 0.5F1+2F3";
+        let usage = "use F1*F2, F3^2-F2^2, border, smooth:<s>, or a sum of terms [c]Fk such as F2-F1 or 0.5F1+2F3";
+        if let Some(v) = t.strip_prefix("smooth:") {
+            return match v.parse::<f32>() {
+                Ok(v) if v >= 0.0 && v.is_finite() => Ok(Combination::Smooth(v)),
+                _ => Err(format!("{s:?}: the smoothness {v:?} is not a finite number >= 0: {usage}")),
+            };
+        }
         match t.as_str() {
             "F1*F2" => return Ok(Combination::Product),
             "border" => return Ok(Combination::Border),

@@ -50,7 +50,8 @@ pub(crate) struct Textures {
     pub(crate) neighbours: Simd<3, 4>,
     /// Fractal F1, five octaves: the foil's crumple.
     pub(crate) crumple: Texture<3, 1>,
-    /// Fractal F1, three octaves: the hide's scales.
+    /// Fractal compact smooth F1, three octaves: the hide's scales, their
+    /// creases rounded.
     pub(crate) scales: Texture<3, 1>,
     pub(crate) stain: Perlin,
     /// Blend curves of the floor's fields, in floor texture units: the
@@ -93,8 +94,8 @@ impl Textures {
             }
         }
         let crumple = Texture::new(config, Combination::f(1), Fractal::octaves(5), None).expect("valid");
-        let scales = Texture::new(config, Combination::f(1), Fractal { octaves: 3, lacunarity: 2.0, gain: 0.35 }, None)
-            .expect("valid");
+        let scales_fractal = Fractal { octaves: 3, lacunarity: 2.0, gain: 0.35 };
+        let scales = Texture::new(config, Combination::Smooth(0.15), scales_fractal, None).expect("valid");
         // Measured now rather than inside the first frame.
         let _ = (crumple.blend_curve(), scales.blend_curve());
         Textures {
@@ -252,7 +253,8 @@ impl Textures {
             let (value, grad) = (g.value.to_array(), g.gradient.map(|v| v.to_array()));
             for i in (0..8).filter(|&i| hits[i].material == Material::Hide) {
                 let n = bump(hits[i].normal, Vec3::new(grad[0][i], grad[1][i], grad[2][i]), 0.05);
-                let t = ((value[i] - 0.5) / 0.8).clamp(0.0, 1.0);
+                // Smooth F1 lies about s below F1 away from the points.
+                let t = ((value[i] - 0.38) / 0.8).clamp(0.0, 1.0);
                 let spot = Vec3::new(0.8, 0.7, 0.3).lerp(Vec3::new(0.08, 0.16, 0.05), t.sqrt());
                 colour[i] = spot * light(hits[i].point, n);
             }
