@@ -41,7 +41,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use simdnoise::Cell2ReturnType;
 use std::hint::black_box;
 use std::time::Instant;
-use worley::{Config, Features32, Grid, Outputs, Simd, SimdBorder};
+use worley::{Config, Features32, Grid, NSphere32, Outputs, Simd, SimdBorder, SimdNSphere, SimdSmooth, Smooth32};
 use worley_harness::sample_point;
 
 const RANDOM: usize = 1 << 18;
@@ -321,6 +321,8 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let f2_ids = Simd::<3, 2>::new(Config { order: 2, ..Config::default() }, Outputs::IdsAndDeltas).unwrap();
     let f4 = Simd::<3, 4>::new(Config { order: 4, ..Config::default() }, Outputs::Distances).unwrap();
     let border = SimdBorder::<3>::new(Config::default()).unwrap();
+    let smooth = SimdSmooth::<3>::new(Config::default()).unwrap();
+    let spheres = SimdNSphere::<3>::new(Config::default()).unwrap();
     let spec = grid_spec();
     let n = grid.len();
     let axes = |pts: &[[f32; 3]]| -> [Vec<f32>; 3] { std::array::from_fn(|a| pts.iter().map(|p| p[a]).collect()) };
@@ -365,6 +367,9 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let mut frame_floor: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
     let mut frame_moves: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
     let mut frame_windows: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
+    let mut smooth_g: Vec<Vec<Smooth32<3>>> = (0..2).map(|_| vec![Smooth32::INVALID; n]).collect();
+    let mut smooth_r: Vec<Vec<Smooth32<3>>> = (0..2).map(|_| vec![Smooth32::INVALID; random.len()]).collect();
+    let (mut spheres_g, mut spheres_r) = (vec![NSphere32::INVALID; n], vec![NSphere32::INVALID; random.len()]);
     let mut entries: Vec<Entry> = Vec::new();
     fn add<'a>(
         entries: &mut Vec<Entry<'a>>,
@@ -513,6 +518,41 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         random.len(),
         Box::new(|| border.border_slice(black_box(random), &mut border_r).unwrap()),
     );
+    // Compact smooth F1 (s = 0.1 and 0.3 user units) and the n-sphere
+    // radius, per sample on both workloads.
+    let smoothness =
+        [(0.1, "grid smooth s 0.1", "random smooth s 0.1"), (0.3, "grid smooth s 0.3", "random smooth s 0.3")];
+    for ((g, r), (s, grid_case, random_case)) in smooth_g.iter_mut().zip(smooth_r.iter_mut()).zip(smoothness) {
+        let (smooth, spec) = (&smooth, &spec);
+        add(
+            &mut entries,
+            "worley SimdSmooth smooth_grid",
+            grid_case,
+            n,
+            Box::new(move || smooth.smooth_grid(spec, s, g).unwrap()),
+        );
+        add(
+            &mut entries,
+            "worley SimdSmooth smooth_slice",
+            random_case,
+            random.len(),
+            Box::new(move || smooth.smooth_slice(black_box(random), s, r).unwrap()),
+        );
+    }
+    add(
+        &mut entries,
+        "worley SimdNSphere n_sphere_grid",
+        "grid n-sphere",
+        n,
+        Box::new(|| spheres.n_sphere_grid(&spec, &mut spheres_g).unwrap()),
+    );
+    add(
+        &mut entries,
+        "worley SimdNSphere n_sphere_slice",
+        "random n-sphere",
+        random.len(),
+        Box::new(|| spheres.n_sphere_slice(black_box(random), &mut spheres_r).unwrap()),
+    );
     let names: [[&'static str; 2]; 3] = [
         ["frame F1", "frame F2−F1"],
         ["frame-shuffled F1", "frame-shuffled F2−F1"],
@@ -635,7 +675,8 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         let quick_ref = of("quick-noise 0.3 F1", &format!("{workload} F1"));
         let simd_ref = match what {
             "F1" => of("simdnoise 3.1 F1", &format!("{workload} F1")),
-            "F2−F1" | "border" => of("simdnoise 3.1 F2−F1", &format!("{workload} F2−F1")),
+            "F2−F1" | "border" | "n-sphere" => of("simdnoise 3.1 F2−F1", &format!("{workload} F2−F1")),
+            _ if what.starts_with("smooth") => of("simdnoise 3.1 F2−F1", &format!("{workload} F2−F1")),
             _ => None,
         };
         let ratio = |r: Option<f64>| r.map_or("".to_string(), |r| format!("{:.2}", rate / r));
