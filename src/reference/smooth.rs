@@ -158,7 +158,8 @@ impl<const D: usize> Reference<D> {
     /// Smooth F1 at `x` (user units) with smoothness `s` (user units), as
     /// the [module's text](self) defines it, certified to within
     /// s · [`SMOOTH_TOLERANCE`]. `s = 0` gives F1 and its gradient; a
-    /// negative, infinite or NaN `s`, or bad `x`, gives [`Smooth::invalid`].
+    /// negative, infinite or NaN `s`, or bad `x`, gives [`Smooth::invalid`];
+    /// in [`Mode::Window`] an empty 3^d block gives +∞ for every `s`.
     ///
     /// ```
     /// use worley::{Config, Reference};
@@ -195,8 +196,12 @@ impl<const D: usize> Reference<D> {
             // F1 as `evaluate` gives it, bit for bit.
             let (nearest, shells, gave_up) = self.search(cell, f, 1);
             let f1 = nearest.finish(metric, scale, shells, gave_up);
-            if !f1.distance[0].is_finite() {
+            if f1.distance[0].is_nan() {
                 return Smooth::invalid();
+            }
+            if f1.distance[0].is_infinite() {
+                // Window mode, and the 3^d block is empty: +∞ as for s > 0.
+                return Smooth { value: f64::INFINITY, gradient: [f64::NAN; D], feature: INVALID_ID, shells };
             }
             let d = metric.distance_of_rank(nearest.rank[0]);
             let gradient = if d > 0.0 { distance_gradient(metric, &nearest.delta[0], d) } else { [0.0; D] };

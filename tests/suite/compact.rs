@@ -190,7 +190,23 @@ fn compact_smooth_f1_bad_input_gives_the_documented_result() {
     }
     // A reach beyond the widest search: NaN.
     assert!(basis.smooth_f1_compact([0.5, 0.5], 1e4).value.is_nan());
-    // Window mode: the 3^d block's points.
+    // Window mode: the 3^d block's points; an empty block is +∞ for every
+    // s, 0 included (F1 itself is +∞ there), in both forms.
     let window = Reference::<2>::new(Config { mode: Mode::Window, ..Config::default() }).unwrap();
     assert!(window.smooth_f1_compact([0.5, 0.5], 0.3).value.is_finite());
+    let sparse =
+        Reference::<2>::new(Config { mode: Mode::Window, density: 0.3, seed: 2, ..Config::default() }).unwrap();
+    let mut empty = 0;
+    for i in 0..2000 {
+        let x = sample_point::<2>(8, i, 100.0);
+        if sparse.evaluate(x).distance[0].is_infinite() {
+            empty += 1;
+            for s in [0.0, 0.3] {
+                let (c, l) = (sparse.smooth_f1_compact(x, s), sparse.smooth_f1(x, s));
+                assert!(c.value == f64::INFINITY && c.feature == INVALID_ID, "{x:?} s {s}: {c:?}");
+                assert!(l.value == f64::INFINITY && l.feature == INVALID_ID, "{x:?} s {s}: {l:?}");
+            }
+        }
+    }
+    assert!(empty > 0, "no empty window among the samples");
 }

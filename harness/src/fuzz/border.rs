@@ -1,10 +1,11 @@
 //! The border distance under fuzzing: [`SimdBorder`] through every entry
-//! point against the f64 [`Reference::border`].
+//! point against the f64 [`Reference::border`]; on the same points, compact
+//! smooth F1 ([`SimdSmooth`]) against [`Reference::smooth_f1_compact`].
 
 use worley::config::{Config, Mode};
 use worley::definition::{Pattern, INVALID_ID};
 use worley::reference::Reference;
-use worley::simd::{Border32, SimdBorder};
+use worley::simd::{Border32, SimdBorder, SimdSmooth, Smooth32};
 
 use super::Bytes;
 
@@ -30,7 +31,11 @@ fn same_bits<const D: usize>(a: &Border32<D>, b: &Border32<D>) -> bool {
 /// F1 and F2 tie within the kernel's bound, the distance within the
 /// border's stated bound, and the neighbour the same unless its bisector
 /// plane ties with the reference's within that bound (measured here in
-/// f64 from the two points' cells).
+/// f64 from the two points' cells). Then compact smooth F1 at a decoded
+/// smoothness (0 to 1.5 user units) on the same points: the same bits
+/// through every entry point, invalid exactly where the reference is, +∞
+/// where it is, the value within 4ε(R + 1/S) + ε|S| (R the reach) and
+/// F1's point the same unless F1 and F2 tie.
 #[inline]
 pub fn border(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
@@ -59,6 +64,8 @@ fn border_in<const D: usize>(config: Config, b: &mut Bytes) {
         points[usize::from(bad >> 2) % 8][0] =
             [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300][usize::from(bad >> 5) % 4];
     }
+    let s = [0.0, 0.05, 0.1, 0.3, 1.0, 1.5][usize::from(b.byte() % 6)];
+    smooth_in::<D>(config, &points, s);
     let eight = simd.border8(&points);
     let mut slice = [Border32::<D>::default(); 8];
     simd.border_slice(&points, &mut slice).expect("room for eight");
@@ -136,4 +143,40 @@ fn plane_distance<const D: usize>(
     let (p1, pj) = (p1?, pj?);
     let apart = (0..D).map(|a| (pj[a] - p1[a]) * (pj[a] - p1[a])).sum::<f64>().sqrt();
     Some((squared(&pj) - squared(&p1)) / (2.0 * apart) / pattern.scale())
+}
+
+fn smooth_in<const D: usize>(config: Config, points: &[[f64; D]; 8], s: f32) {
+    let simd = SimdSmooth::<D>::new(config).expect("a valid Euclidean configuration");
+    let reference = Reference::<D>::new(config).expect("a valid configuration");
+    let two = Reference::<D>::new(Config { order: 2, ..config }).expect("a valid configuration");
+    let eight = simd.smooth8(points, s);
+    let mut slice = [Smooth32::<D>::INVALID; 8];
+    simd.smooth_slice(points, s, &mut slice).expect("room for eight");
+    let bits = |v: &Smooth32<D>| (v.value.to_bits(), v.gradient.map(f32::to_bits), v.feature);
+    let scale = reference.pattern().scale();
+    let sd = f64::from(s);
+    for (i, x) in points.iter().enumerate() {
+        let got = eight.lane(i);
+        let what = format!("{config:?} s {s} at {x:?}");
+        assert_eq!(bits(&got), bits(&simd.smooth(*x, s)), "{what}: lane {i} of 8 differs from the one-point call");
+        assert_eq!(bits(&got), bits(&slice[i]), "{what}: lane {i} of 8 differs from the slice call");
+        let want = reference.smooth_f1_compact(*x, sd);
+        if want.value.is_nan() {
+            assert!(got.value.is_nan() && got.feature == INVALID_ID, "{what}: invalid in the reference, {got:?}");
+            continue;
+        }
+        if want.value.is_infinite() {
+            assert_eq!(f64::from(got.value), want.value, "{what}: {got:?} against {want:?}");
+            continue;
+        }
+        let f = two.evaluate(*x);
+        let (f1, f2) = (f.distance[0], f.distance[1]);
+        let f1_tie = f2 - f1 <= 2.0 * super::bound(f2, scale);
+        assert!(f1_tie || got.feature == want.feature, "{what}: F1's point {got:?} against {want:?}");
+        let h1 = (f1 * f1 + sd * sd).sqrt() - sd;
+        let reach = ((h1 + 2.0 * sd).powi(2) - sd * sd).sqrt();
+        let allowed = super::bound(reach, scale) + f64::from(f32::EPSILON) * want.value.abs();
+        let error = (f64::from(got.value) - want.value).abs();
+        assert!(error <= allowed, "{what}: {} against {} (bound {allowed:e})", got.value, want.value);
+    }
 }
