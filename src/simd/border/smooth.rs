@@ -332,53 +332,68 @@ impl<const D: usize> SimdSmooth<D> {
 /// and deltas, lane units, at least F1's point), `sl` the smoothness in
 /// lane units.
 fn root<const D: usize>(d2: &[f32], delta: &[[f32; D]], sl: f64) -> (f64, [f64; D]) {
+    // Per point: √(F² + s²) and h = √(F² + s²) − s.
     let mut roots = [0f64; KEPT];
     for (r, &d) in roots.iter_mut().zip(d2) {
         *r = (f64::from(d) + sl * sl).sqrt();
     }
     let roots = &roots[..d2.len()];
     let h1 = roots.iter().fold(f64::INFINITY, |m, &r| m.min(r - sl));
-    let mut value = h1;
-    if d2.len() > 1 {
-        // Newton on G(v) = Σ φ((h_j − v)/s) − 1, increasing in v, with
-        // G(h1 − s) = −1 and G(h1) ≥ 0; a step that leaves the bracket
-        // bisects it instead.
-        let (mut lo, mut hi) = (h1 - sl, h1);
-        for _ in 0..64 {
-            let (mut g, mut slope) = (-1.0, 0.0);
-            for &r in roots {
-                let t = (r - sl - value) / sl;
-                if t < 1.0 {
-                    let e = (1.0 - 1.0 / (1.0 - t)).exp();
-                    g += e;
-                    slope += e / ((1.0 - t) * (1.0 - t));
-                }
-            }
-            if g >= 0.0 {
-                hi = value;
-            } else {
-                lo = value;
-            }
-            let step = g * sl / slope;
-            if step.abs() <= 1e-12 * sl {
-                // Converged: the last step may be below the value's ulp.
-                value -= step;
-                break;
-            }
-            let next = value - step;
-            value = if next > lo && next < hi { next } else { 0.5 * (lo + hi) };
+    // The points that take part: t = (h − S)/s < 1 at S = h1 (t only grows
+    // as S falls below h1), with their deltas.
+    let mut part = [(0f64, 0usize); KEPT];
+    let mut n = 0;
+    for (j, &r) in roots.iter().enumerate() {
+        if r - sl - h1 < sl {
+            part[n] = (r, j);
+            n += 1;
         }
+    }
+    let part = &part[..n];
+    let unit = |(r, j): (f64, usize)| delta[j].map(|v| f64::from(v) / r);
+    if n == 1 {
+        // F1's point alone: S = h1, its weight φ(0) = 1.
+        return (h1, unit(part[0]));
+    }
+    // Newton on G(v) = Σ φ((h_j − v)/s) − 1, increasing in v, with
+    // G(h1 − s) = −1 and G(h1) ≥ 0; a step that leaves the bracket bisects
+    // it instead. The weights −φ'(t_j) of the last evaluation give the
+    // gradient: the last step is below 10^−12 s.
+    let (mut lo, mut hi) = (h1 - sl, h1);
+    let mut value = h1;
+    let mut weights = [0f64; KEPT];
+    for _ in 0..64 {
+        let (mut g, mut slope) = (-1.0, 0.0);
+        for (w, &(r, _)) in weights.iter_mut().zip(part) {
+            let t = (r - sl - value) / sl;
+            *w = 0.0;
+            if t < 1.0 {
+                let e = (1.0 - 1.0 / (1.0 - t)).exp();
+                g += e;
+                *w = e / ((1.0 - t) * (1.0 - t));
+                slope += *w;
+            }
+        }
+        if g >= 0.0 {
+            hi = value;
+        } else {
+            lo = value;
+        }
+        let step = g * sl / slope;
+        if step.abs() <= 1e-12 * sl {
+            // Converged: the last step may be below the value's ulp.
+            value -= step;
+            break;
+        }
+        let next = value - step;
+        value = if next > lo && next < hi { next } else { 0.5 * (lo + hi) };
     }
     let mut weight = 0.0;
     let mut gradient = [0.0; D];
-    for (&r, v) in roots.iter().zip(delta) {
-        let t = (r - sl - value) / sl;
-        if t < 1.0 {
-            let w = (1.0 - 1.0 / (1.0 - t)).exp() / ((1.0 - t) * (1.0 - t));
-            weight += w;
-            for (g, &va) in gradient.iter_mut().zip(v) {
-                *g += w * f64::from(va) / r;
-            }
+    for (&w, &p) in weights.iter().zip(part) {
+        weight += w;
+        for (g, u) in gradient.iter_mut().zip(unit(p)) {
+            *g += w * u;
         }
     }
     (value, gradient.map(|g| g / weight))
