@@ -174,7 +174,7 @@ fn compact_smooth_f1_is_continuous_along_lines_across_faces_and_its_reach() {
 }
 
 #[test]
-fn compact_smooth_f1_bad_input_gives_the_documented_result() {
+fn smooth_f1_bad_input_gives_the_documented_result_in_both_forms() {
     let basis = Reference::<2>::new(Config::default()).unwrap();
     for (x, s) in [
         ([f64::NAN, 0.0], 0.3),
@@ -184,9 +184,11 @@ fn compact_smooth_f1_bad_input_gives_the_documented_result() {
         ([0.5, 0.5], f64::NAN),
         ([0.5, 0.5], f64::INFINITY),
     ] {
-        let v = basis.smooth_f1_compact(x, s);
-        assert!(v.value.is_nan() && v.gradient.iter().all(|g| g.is_nan()), "{x:?} s {s}: {v:?}");
-        assert_eq!(v.feature, INVALID_ID);
+        // Both forms: the compact one and the log-sum-exp.
+        for v in [basis.smooth_f1_compact(x, s), basis.smooth_f1(x, s)] {
+            assert!(v.value.is_nan() && v.gradient.iter().all(|g| g.is_nan()), "{x:?} s {s}: {v:?}");
+            assert_eq!(v.feature, INVALID_ID);
+        }
     }
     // A reach beyond the widest search: NaN.
     assert!(basis.smooth_f1_compact([0.5, 0.5], 1e4).value.is_nan());

@@ -140,15 +140,8 @@ impl<const D: usize> Simd<D, 1> {
             if !L::any(needs) {
                 return;
             }
-            let h = self.hash::<L>(c.terms);
-            let top = self.population::<L>(h);
-            for p in &self.points {
-                let active = L::and(needs, L::lt(self.key::<L>(p), top));
-                if !L::any(active) {
-                    break;
-                }
-                let q = Self::coordinates_of::<L>(p, h);
-                let mut same = L::and(active, L::u_eq(Self::id_of::<L>(p, h), nearest.id[0]));
+            self.cell_points::<L>(c, needs, |active, q, id| {
+                let mut same = L::and(active, L::u_eq(id, nearest.id[0]));
                 for (a, qa) in q.iter().enumerate() {
                     same = L::and(same, L::eq(L::sub(c.shifted[a], L::u24_to_f(*qa)), nearest.delta[0][a]));
                 }
@@ -156,7 +149,7 @@ impl<const D: usize> Simd<D, 1> {
                     p1[a] = L::select_u(same, L::u_add(c.corner[a], q[a]), p1[a]);
                 }
                 *missing = L::select(same, L::f(0.0), *missing);
-            }
+            });
         };
         for offset in &self.block {
             look(&frame.cell(offset), &mut missing);
@@ -183,16 +176,8 @@ impl<const D: usize> Simd<D, 1> {
         p1: &[L::U; D],
         plane: &mut Plane<L, D>,
     ) {
-        let h = self.hash::<L>(c.terms);
-        let top = self.population::<L>(h);
         let d1 = nearest.delta[0];
-        for p in &self.points {
-            let active = L::and(needs, L::lt(self.key::<L>(p), top));
-            if !L::any(active) {
-                break;
-            }
-            let q = Self::coordinates_of::<L>(p, h);
-            let id = Self::id_of::<L>(p, h);
+        self.cell_points::<L>(c, needs, |active, q, id| {
             // u = p_j − p₁ exactly in integers, then rounded once;
             // b = u·(m − x) / |u| with m − x = −(δ₁ + δ_j) / 2, that is
             // b = k / (2|u|) with k = −u·(δ₁ + δ_j).
@@ -206,6 +191,28 @@ impl<const D: usize> Simd<D, 1> {
                 us = L::add(us, L::mul(u[a], L::add(d1[a], dj)));
             }
             plane.offer_point(active, us, uu, u, id);
+        });
+    }
+
+    /// The points of cell `c` in the lanes of `needs`, in the generator's
+    /// order: `visit` gets each point slot that some lane's population
+    /// reaches, with those lanes, the point's coordinates in the cell (24
+    /// bits, lane units) and its ID.
+    #[inline(always)]
+    pub(super) fn cell_points<L: Lanes>(
+        &self,
+        c: &CellAt<L, D>,
+        needs: L::M,
+        mut visit: impl FnMut(L::M, [L::U; D], L::U),
+    ) {
+        let h = self.hash::<L>(c.terms);
+        let top = self.population::<L>(h);
+        for p in &self.points {
+            let active = L::and(needs, L::lt(self.key::<L>(p), top));
+            if !L::any(active) {
+                break;
+            }
+            visit(active, Self::coordinates_of::<L>(p, h), Self::id_of::<L>(p, h));
         }
     }
 }

@@ -462,14 +462,7 @@ impl<const D: usize> Simd<D, 1> {
     /// The points of cell `c` nearer than `reach`, in the lanes of `needs`.
     #[inline(always)]
     fn near_cell<L: Lanes>(&self, c: &CellAt<L, D>, needs: L::M, reach: L::F, near: &mut Near<D>) {
-        let h = self.hash::<L>(c.terms);
-        let top = self.population::<L>(h);
-        for p in &self.points {
-            let active = L::and(needs, L::lt(self.key::<L>(p), top));
-            if !L::any(active) {
-                break;
-            }
-            let q = Self::coordinates_of::<L>(p, h);
+        self.cell_points::<L>(c, needs, |active, q, _| {
             let mut delta = [L::f(0.0); D];
             let mut d2 = L::f(0.0);
             for (a, v) in delta.iter_mut().enumerate() {
@@ -480,6 +473,6 @@ impl<const D: usize> Simd<D, 1> {
             if inside != 0 {
                 near.push::<L>(inside, d2, &delta);
             }
-        }
+        });
     }
 }
