@@ -318,11 +318,8 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     #[inline(always)]
     fn octave_value<const ONE: bool>(&self, x: &[[f64; D]; 8], i: usize) -> f32x8 {
         let (frequency, _, period) = self.octaves[i];
-        if let Some((smooth, s)) = &self.smooth {
-            return self.smooths::<ONE>(smooth, *s, x, frequency).value;
-        }
-        match &self.border {
-            Some(border) => self.borders::<ONE>(border, x, frequency, period).distance,
+        match self.own_kernel::<ONE>(x, frequency, period) {
+            Some((value, _)) => value,
             None => self.combination.value(&self.features::<ONE>(&self.values, x, frequency, period).distance),
         }
     }
@@ -405,28 +402,26 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         }
     }
 
-    /// The eight lanes' compact smooth F1 at `frequency · x` (never
-    /// periodic: such textures are refused); with `ONE`, lane 0's in one
-    /// lane, spread.
+    /// The combinations with a kernel of their own ([`Combination::Border`],
+    /// [`Combination::Smooth`]): the eight lanes' value at `frequency · x`
+    /// and its gradient there (the border plane's normal, ∇S); `None` for
+    /// the combinations of F1..Fn. With `ONE`, lane 0's in one lane, spread.
     #[inline(always)]
-    fn smooths<const ONE: bool>(
+    fn own_kernel<const ONE: bool>(
         &self,
-        smooth: &SimdSmooth<D>,
-        s: f32,
         x: &[[f64; D]; 8],
         frequency: f64,
-    ) -> Smooth8<D> {
-        let (y, _) = self.octave(x, frequency, None);
-        if ONE {
-            let v = smooth.smooth(y[0], s);
-            Smooth8 {
-                value: f32x8::splat(v.value),
-                gradient: v.gradient.map(f32x8::splat),
-                feature: wide::u32x8::splat(v.feature),
-            }
-        } else {
-            smooth.smooth8(&y, s)
+        period: Option<Period<D>>,
+    ) -> Option<(f32x8, [f32x8; D])> {
+        if let Some(border) = &self.border {
+            let b = self.borders::<ONE>(border, x, frequency, period);
+            return Some((b.distance, b.normal));
         }
+        let (smooth, s) = self.smooth.as_ref()?;
+        // Never periodic: such textures are refused.
+        let (y, _) = self.octave(x, frequency, None);
+        let v = if ONE { Smooth8::splat(&smooth.smooth(y[0], *s)) } else { smooth.smooth8(&y, *s) };
+        Some((v.value, v.gradient))
     }
 
     /// The eight lanes' features at `frequency · x` ([`Texture::octave`]);

@@ -55,26 +55,13 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             // times the octave's weight.
             let chain = f32x8::splat(amplitude * frequency as f32 * self.input_scale);
             let chain = if alpha == [1.0; 8] { chain } else { chain * f32x8::from(alpha) };
-            if let Some((smooth, s)) = &self.smooth {
-                let v8 = self.smooths::<ONE>(smooth, *s, x, frequency);
-                let v = blend(v8.value);
+            if let Some((own, normal)) = self.own_kernel::<ONE>(x, frequency, period) {
+                let v = blend(own);
                 value = if i == 0 { v } else { value + f32x8::splat(amplitude) * v };
-                for (sum, g) in gradient.iter_mut().zip(&v8.gradient) {
-                    *sum += chain * *g;
-                }
-                for (d, v) in defined.iter_mut().zip(v8.value.to_array()) {
-                    *d &= v.is_finite();
-                }
-                continue;
-            }
-            if let Some(border) = &self.border {
-                let b = self.borders::<ONE>(border, x, frequency, period);
-                let v = blend(b.distance);
-                value = if i == 0 { v } else { value + f32x8::splat(amplitude) * v };
-                for (sum, n) in gradient.iter_mut().zip(&b.normal) {
+                for (sum, n) in gradient.iter_mut().zip(&normal) {
                     *sum += chain * *n;
                 }
-                for (d, v) in defined.iter_mut().zip(b.distance.to_array()) {
+                for (d, v) in defined.iter_mut().zip(own.to_array()) {
                     *d &= v.is_finite();
                 }
                 continue;

@@ -101,6 +101,15 @@ impl<const D: usize> Smooth8<D> {
         std::array::from_fn(|i| self.lane(i))
     }
 
+    /// One sample's value in all eight lanes.
+    pub fn splat(v: &Smooth32<D>) -> Self {
+        Smooth8 {
+            value: f32x8::splat(v.value),
+            gradient: v.gradient.map(f32x8::splat),
+            feature: u32x8::splat(v.feature),
+        }
+    }
+
     fn from_lanes(lanes: &[Smooth32<D>; 8]) -> Self {
         Smooth8 {
             value: f32x8::from(lanes.map(|v| v.value)),
@@ -305,11 +314,12 @@ impl<const D: usize> SimdSmooth<D> {
         }
         let mut near = Near::new();
         let uncertified = search(L::f_load(&reach[..L::N]), &mut near);
-        let cells = at.cells_i64();
         for i in (0..L::N).filter(|&i| open[i]) {
             out[i] = if uncertified & (1 << i) != 0 {
                 Smooth32::INVALID
             } else if near.count[i] > KEPT {
+                // The lane's own position: its cell and its 24-bit fraction.
+                let cells = at.cells_i64();
                 let fraction: [f64; D] = std::array::from_fn(|a| {
                     let mut f = [0f32; WIDEST];
                     L::f_store(at.f[a], &mut f[..L::N]);
