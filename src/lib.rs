@@ -37,7 +37,7 @@
 //! | a pixel's footprint (a filter width per sample) | [`texture::Texture::filtered8`], `filtered`, `filtered_values`, `filtered_grid`, `filtered_gradient8`; [`filter`] | unresolved octaves skipped, values blended towards their means; zero width = the point sample's bits |
 //! | the distance to the cell's border (even mortar) | [`SimdBorder::border`], [`SimdBorder::border8`], `border_slice`, `border_grid`, `border_in_cell`, `border_periodic`; [`Reference::border`] | with the neighbour's ID and the border's normal; Euclidean |
 //! | smooth F1 (rounded cells) | compact: [`SimdSmooth::smooth`], [`SimdSmooth::smooth8`], `smooth_slice`, `smooth_grid`, `smooth_in_cell`; [`Reference::smooth_f1_compact`]; log-sum-exp: [`Reference::smooth_f1`] | C∞, with its gradient; compact: exact, points within F1 + 2s, lanes Euclidean; log-sum-exp: f64, certified to [`SMOOTH_TOLERANCE`]; any metric in f64 |
-//! | the n-sphere radius (circles that fit their cells) | [`SimdNSphere::n_sphere`], [`SimdNSphere::n_sphere8`], `n_sphere_slice`, `n_sphere_grid`, `n_sphere_in_cell`; [`Reference::n_sphere`] | half the distance from F1's point to its nearest, with both IDs; lanes Euclidean |
+//! | the n-sphere radius (circles that fit their cells) | [`SimdNSphere::n_sphere`], [`SimdNSphere::n_sphere8`], `n_sphere_slice`, `n_sphere_grid`, `n_sphere_in_cell`, `n_sphere_periodic`; [`Reference::n_sphere`]; textures' [`Combination::NSphere`](texture::Combination::NSphere) | half the distance from F1's point to its nearest, with both IDs; lanes Euclidean |
 //! | Perlin noise beside it | [`perlin::Perlin`] | one point or eight |
 //!
 //! [`Outputs`] says whether IDs and deltas are computed at all: asking for

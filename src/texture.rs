@@ -1,6 +1,7 @@
 //! Textures on the basis: combinations of F1..Fn, the distance to the
-//! cell's border ([`Combination::Border`]) or compact smooth F1
-//! ([`Combination::Smooth`]), fractal sums, their analytic
+//! cell's border ([`Combination::Border`]), compact smooth F1
+//! ([`Combination::Smooth`]) or the n-sphere radius
+//! ([`Combination::NSphere`]), fractal sums, their analytic
 //! gradients, a periodic (tileable) domain, and normal perturbation for bump
 //! mapping, all on the 8-lane kernel.
 //!
@@ -25,7 +26,9 @@ use wide::f32x8;
 
 use crate::config::{Config, Mode};
 use crate::filter::BlendCurve;
-use crate::simd::{Border8, Features8, Outputs, Period, PeriodError, Simd, SimdBorder, SimdSmooth, Smooth8};
+use crate::simd::{
+    Border8, Features8, NSphere8, Outputs, Period, PeriodError, Simd, SimdBorder, SimdNSphere, SimdSmooth, Smooth8,
+};
 
 mod batch;
 mod combination;
@@ -62,6 +65,7 @@ pub struct Sample {
 /// | F2 − F1 | [0, ∞); 0 exactly on cell borders | as above |
 /// | [`Combination::Border`] | [0, ∞); at least (F2 − F1)/2 | [`Texture::measure_range`] |
 /// | [`Combination::Smooth`] with smoothness s | (−s, ∞): at most F1, above √(F1² + s²) − 2s | [`Texture::measure_range`] |
+/// | [`Combination::NSphere`] | [0, ∞); at most (F1 + F2)/2 | [`Texture::measure_range`] |
 /// | a fractal sum of n octaves | Σ a_i·C_i with a_i = gain^i: at least Σ a_i·lo_i, and at least 1 − n·0.1 % of samples at most Σ a_i·hi_i (a union bound on the octaves' quantiles) | [`Texture::measure_range`] |
 ///
 /// NaN marks bad input only. For display, [`Texture::measure_range`] gives
@@ -75,6 +79,8 @@ pub struct Texture<const D: usize, const N: usize> {
     border: Option<SimdBorder<D>>,
     /// Compact smooth F1 and its smoothness, for [`Combination::Smooth`].
     smooth: Option<(SimdSmooth<D>, f32)>,
+    /// The n-sphere radius, for [`Combination::NSphere`].
+    n_sphere: Option<SimdNSphere<D>>,
     combination: Combination,
     fractal: Fractal,
     period: Option<Period<D>>,
@@ -128,6 +134,10 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             Combination::Smooth(s) => Some((SimdSmooth::new(config)?, s)),
             _ => None,
         };
+        let n_sphere = match combination {
+            Combination::NSphere => Some(SimdNSphere::new(config)?),
+            _ => None,
+        };
         let mut octaves = Vec::new();
         let (mut frequency, mut amplitude) = (1.0f64, 1.0f32);
         for _ in 0..fractal.octaves {
@@ -156,6 +166,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             deltas,
             border,
             smooth,
+            n_sphere,
             combination,
             fractal,
             period,
@@ -363,7 +374,9 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         let mean = match &self.combination {
             Combination::Linear(c) => c.iter().enumerate().map(|(k, &ck)| f64::from(ck) * moment(k + 1, 1.0)).sum(),
             Combination::SquareDifference => moment(3, 2.0) - moment(2, 2.0),
-            Combination::Product | Combination::Border | Combination::Smooth(_) => return None,
+            Combination::Product | Combination::Border | Combination::Smooth(_) | Combination::NSphere => {
+                return None;
+            }
         };
         Some(mean as f32)
     }
@@ -403,9 +416,10 @@ impl<const D: usize, const N: usize> Texture<D, N> {
     }
 
     /// The combinations with a kernel of their own ([`Combination::Border`],
-    /// [`Combination::Smooth`]): the eight lanes' value at `frequency · x`
-    /// and its gradient there (the border plane's normal, ∇S); `None` for
-    /// the combinations of F1..Fn. With `ONE`, lane 0's in one lane, spread.
+    /// [`Combination::Smooth`], [`Combination::NSphere`]): the eight lanes'
+    /// value at `frequency · x` and its gradient there (the border plane's
+    /// normal, ∇S, 0); `None` for the combinations of F1..Fn. With `ONE`,
+    /// lane 0's in one lane, spread.
     #[inline(always)]
     fn own_kernel<const ONE: bool>(
         &self,
@@ -416,6 +430,18 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         if let Some(border) = &self.border {
             let b = self.borders::<ONE>(border, x, frequency, period);
             return Some((b.distance, b.normal));
+        }
+        if let Some(spheres) = &self.n_sphere {
+            let n = match (self.octave(x, frequency, period), ONE) {
+                ((y, Some(p)), true) => NSphere8::splat(&spheres.n_sphere_periodic(y[0], &p)),
+                ((y, None), true) => NSphere8::splat(&spheres.n_sphere(y[0])),
+                ((y, Some(p)), false) => spheres.n_sphere8_periodic(&y, &p),
+                ((y, None), false) => spheres.n_sphere8(&y),
+            };
+            // Constant over each cell: 0, and NaN where the radius is NaN
+            // (bad input) or +∞ (an empty window), as smooth F1's.
+            let zero = n.radius * f32x8::splat(0.0);
+            return Some((n.radius, [zero; D]));
         }
         let (smooth, s) = self.smooth.as_ref()?;
         // Never periodic: such textures are refused.

@@ -59,8 +59,9 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(2..=4))]
     pub dim: u8,
     /// The combination: F1, F2-F1, 0.5F1+2F3, F1*F2, F3^2-F2^2 (F1..F4), border (the distance
-    /// to the cell's border: even lines), or smooth:S (compact smooth F1 with smoothness S in
-    /// user units: rounded cells); the last two Euclidean only.
+    /// to the cell's border: even lines), smooth:S (compact smooth F1 with smoothness S in
+    /// user units: rounded cells), or n-sphere (half the distance from F1's point to its
+    /// nearest: one value per cell); the last three Euclidean only.
     #[arg(long, default_value = "F1", value_parser = parse_combination)]
     pub combo: Combination,
     /// Metric: euclidean, manhattan, chebyshev, or minkowski:P with P >= 1.

@@ -238,6 +238,33 @@ fn a_smooth_render_matches_the_library_and_refuses_what_it_cannot_do() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `--combo n-sphere`: the n-sphere radius as the library's lanes compute
+/// it, bit for bit, periodic with `--period`; other metrics are refused.
+#[test]
+fn an_n_sphere_render_matches_the_library_and_tiles() {
+    let dir = scratch("n-sphere");
+    let pfm = dir.join("spheres.pfm");
+    let args = [
+        "render", "--dim", "2", "--combo", "n-sphere", "--period", "4,4", "--extent", "8", "--size", "32x32", "--png",
+        "-", "--pfm",
+    ];
+    let out = worley(&[&args[..], &[pfm.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (w, _, values) = from_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+    let spheres = worley::SimdNSphere::<2>::new(Config::default()).unwrap();
+    let period = Period::new([4, 4]).unwrap();
+    for j in 0..32 {
+        for i in 0..32 {
+            let want = spheres.n_sphere_periodic(pixel([0.0, 0.0], 8.0, w, i, j), &period).radius;
+            assert_eq!(values[j * w + i].to_bits(), want.to_bits(), "pixel ({i}, {j})");
+        }
+    }
+    let refused = worley(&["render", "--combo", "n-sphere", "--metric", "manhattan", "--png", "-"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("Euclidean"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn random_combinations_print_their_coefficients() {
     let dir = scratch("combos");

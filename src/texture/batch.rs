@@ -247,9 +247,11 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         // The largest magnitude any point's coordinate or partial sum takes.
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
         let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
-        // Smooth F1 has no grid tiles: eight points at a time.
+        // Smooth F1 and the n-sphere radius have no grid tiles: eight
+        // points at a time.
         let suits = finite
             && self.smooth.is_none()
+            && self.n_sphere.is_none()
             && self.period.is_none()
             && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300)
             && alpha.iter().zip(&self.octaves).all(|(&a, &(f, _, _))| {

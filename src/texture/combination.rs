@@ -1,6 +1,6 @@
 //! How F1..Fn are combined into one value ([`Combination`]): the
 //! chapter's combinations, any weighted sum, the border distance, compact
-//! smooth F1, and their names on the command line.
+//! smooth F1, the n-sphere radius, and their names on the command line.
 
 use wide::f32x8;
 
@@ -25,6 +25,11 @@ pub enum Combination {
     /// texture, which does not take it yet) ([`SimdSmooth`](crate::SimdSmooth)):
     /// rounded cells, C∞, with an analytic gradient. Euclidean only.
     Smooth(f32),
+    /// The n-sphere radius ([`SimdNSphere`](crate::SimdNSphere)): half the
+    /// distance from F1's point to its nearest other point, constant over
+    /// each Voronoi cell (its gradient is 0): a disc or ball of this radius
+    /// around each point fits inside its cell. Euclidean only.
+    NSphere,
 }
 
 impl Combination {
@@ -46,17 +51,18 @@ impl Combination {
             Combination::Linear(c) => c.len(),
             Combination::Product => 2,
             Combination::SquareDifference => 3,
-            Combination::Border | Combination::Smooth(_) => 1,
+            Combination::Border | Combination::Smooth(_) | Combination::NSphere => 1,
         }
     }
 
     /// A short name, e.g. `F2-F1`, `0.5F1+2F3`, `F1*F2`, `border`,
-    /// `smooth:0.3`.
+    /// `smooth:0.3`, `n-sphere`.
     pub fn name(&self) -> String {
         match self {
             Combination::Product => "F1*F2".into(),
             Combination::Border => "border".into(),
             Combination::Smooth(v) => format!("smooth:{v}"),
+            Combination::NSphere => "n-sphere".into(),
             Combination::SquareDifference => "F3^2-F2^2".into(),
             Combination::Linear(c) => {
                 let mut s = String::new();
@@ -101,14 +107,14 @@ impl Combination {
         Ok(())
     }
 
-    /// The combination of distances, in lanes. [`Combination::Border`] and
-    /// [`Combination::Smooth`] are not functions of distances: textures
-    /// evaluate them through their [`SimdBorder`](crate::SimdBorder) and
-    /// [`SimdSmooth`](crate::SimdSmooth) and never call this for them (NaN if they did).
+    /// The combination of distances, in lanes. [`Combination::Border`],
+    /// [`Combination::Smooth`] and [`Combination::NSphere`] are not
+    /// functions of the sample's distances: textures evaluate them through
+    /// their own kernels and never call this for them (NaN if they did).
     #[inline(always)]
     pub(super) fn value<const N: usize>(&self, f: &[f32x8; N]) -> f32x8 {
         match self {
-            Combination::Border | Combination::Smooth(_) => f32x8::splat(f32::NAN),
+            Combination::Border | Combination::Smooth(_) | Combination::NSphere => f32x8::splat(f32::NAN),
             Combination::Linear(c) => {
                 let mut v = f32x8::splat(0.0);
                 for (ck, fk) in c.iter().zip(f) {
@@ -121,13 +127,13 @@ impl Combination {
         }
     }
 
-    /// d(combination)/d(F_k) for each k, in lanes (none for
-    /// [`Combination::Border`] and [`Combination::Smooth`], whose gradients
-    /// come from their kernels).
+    /// d(combination)/d(F_k) for each k, in lanes (none for the
+    /// combinations with a kernel of their own, whose gradients come from
+    /// their kernels).
     pub(super) fn weights<const N: usize>(&self, f: &[f32x8; N]) -> [f32x8; N] {
         let mut w = [f32x8::splat(0.0); N];
         match self {
-            Combination::Border | Combination::Smooth(_) => {}
+            Combination::Border | Combination::Smooth(_) | Combination::NSphere => {}
             Combination::Linear(c) => {
                 for (wk, ck) in w.iter_mut().zip(c) {
                     *wk = f32x8::splat(*ck);
@@ -150,11 +156,12 @@ impl std::str::FromStr for Combination {
     type Err = String;
 
     /// `F1*F2`, `F3^2-F2^2`, `border`, `smooth:<s>` (compact smooth F1,
-    /// e.g. `smooth:0.3`), or a linear sum of terms `[c]F<k>` such as
+    /// e.g. `smooth:0.3`), `n-sphere`, or a linear sum of terms `[c]F<k>` such as
     /// `F2-F1`, `0.5F1+2F3`, `-1.5*F2+F4` (k from 1 to 16).
     fn from_str(s: &str) -> Result<Self, String> {
         let t: String = s.chars().filter(|c| !c.is_whitespace()).collect();
-        let usage = "use F1*F2, F3^2-F2^2, border, smooth:<s>, or a sum of terms [c]Fk such as F2-F1 or 0.5F1+2F3";
+        let usage =
+            "use F1*F2, F3^2-F2^2, border, smooth:<s>, n-sphere, or a sum of terms [c]Fk such as F2-F1 or 0.5F1+2F3";
         if let Some(v) = t.strip_prefix("smooth:") {
             return match v.parse::<f32>() {
                 Ok(v) if v >= 0.0 && v.is_finite() => Ok(Combination::Smooth(v)),
@@ -164,6 +171,7 @@ impl std::str::FromStr for Combination {
         match t.as_str() {
             "F1*F2" => return Ok(Combination::Product),
             "border" => return Ok(Combination::Border),
+            "n-sphere" => return Ok(Combination::NSphere),
             "F3^2-F2^2" => return Ok(Combination::SquareDifference),
             "" => return Err(format!("empty combination: {usage}")),
             _ => {}

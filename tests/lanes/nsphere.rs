@@ -1,10 +1,12 @@
 //! The n-sphere radius in lanes (`SimdNSphere`) against the f64 reference
 //! (`Reference::n_sphere`, itself held to brute force in
-//! `tests/suite/smooth.rs`), the same bits through every entry point, and
-//! bad lanes kept to themselves.
+//! `tests/suite/smooth.rs`), the periodic pattern against brute force over
+//! its images, the same bits through every entry point, and bad lanes kept
+//! to themselves.
 
-use worley::{Config, ConfigError, Grid, Metric, Mode, NSphere32, Reference, SimdNSphere, INVALID_ID};
-use worley_harness::{chunked, sample_point};
+use worley::definition::FRACTION_ULP;
+use worley::{Config, ConfigError, Grid, Metric, Mode, NSphere32, Period, Reference, SimdNSphere, INVALID_ID};
+use worley_harness::{chunked, sample_point, uniform};
 
 /// The stated bound: the radius is F2 halved at an exact centre, and F2
 /// is within 4ε(F2 + 1/S) of the exact distance.
@@ -132,4 +134,114 @@ fn simd_n_sphere_keeps_bad_lanes_to_themselves_and_refuses_other_metrics() {
         let config = Config { metric, ..Config::default() };
         assert_eq!(SimdNSphere::<3>::new(config).unwrap_err(), ConfigError::BorderMetric(metric));
     }
+}
+
+/// Brute force over the periodic point set (`x` and the answer's radius in
+/// cells): every point of one period at shifts −2..=2 periods per axis,
+/// F1's image the nearest to `x` (the smallest ID among equals), then the
+/// nearest other image to it. Returns (radius in cells, centre ID,
+/// neighbour ID).
+fn periodic_n_sphere<const D: usize>(config: Config, period: [u32; D], x: [f64; D]) -> (f64, u32, u32) {
+    let pattern = Reference::<D>::new(config).unwrap().pattern().clone();
+    let mut images: Vec<([f64; D], u32)> = Vec::new();
+    let cells: usize = period.iter().map(|&p| p as usize).product();
+    for index in 0..cells {
+        let mut rest = index;
+        let cell: [i64; D] = std::array::from_fn(|a| {
+            let c = rest % period[a] as usize;
+            rest /= period[a] as usize;
+            c as i64
+        });
+        for point in pattern.points(cell) {
+            for shift in 0..5usize.pow(D as u32) {
+                let mut rest = shift;
+                let at: [f64; D] = std::array::from_fn(|a| {
+                    let k = (rest % 5) as f64 - 2.0;
+                    rest /= 5;
+                    cell[a] as f64 + k * f64::from(period[a]) + f64::from(point.fraction[a]) * FRACTION_ULP
+                });
+                images.push((at, point.id));
+            }
+        }
+    }
+    let r: [f64; D] = std::array::from_fn(|a| x[a].rem_euclid(f64::from(period[a])));
+    let d2 = |p: &[f64; D], q: &[f64; D]| (0..D).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>();
+    let key = |d: f64, id: u32| (d, id);
+    let centre = images
+        .iter()
+        .enumerate()
+        .min_by(|a, b| key(d2(&a.1 .0, &r), a.1 .1).partial_cmp(&key(d2(&b.1 .0, &r), b.1 .1)).unwrap())
+        .unwrap();
+    let (c, (cp, cid)) = (centre.0, *centre.1);
+    let neighbour = images
+        .iter()
+        .enumerate()
+        .filter(|&(j, _)| j != c)
+        .min_by(|a, b| key(d2(&a.1 .0, &cp), a.1 .1).partial_cmp(&key(d2(&b.1 .0, &cp), b.1 .1)).unwrap())
+        .unwrap()
+        .1;
+    (0.5 * d2(&neighbour.0, &cp).sqrt(), cid, neighbour.1)
+}
+
+/// The periodic radius (`n_sphere_periodic`, eight lanes and one) against
+/// brute force over the periodic images, for periods of a few cells where
+/// the search wraps around.
+#[test]
+fn periodic_n_sphere_agrees_with_brute_force_over_periodic_images() {
+    fn go<const D: usize>(period: [u32; D], seed: u64) -> f64 {
+        let config = Config { seed, ..Config::default() };
+        let simd = SimdNSphere::<D>::new(config).unwrap();
+        let p = Period::new(period).unwrap();
+        let scale = Reference::<D>::new(config).unwrap().pattern().scale();
+        let mut worst = 0f64;
+        for block in 0..40 {
+            let x: [[f64; D]; 8] = std::array::from_fn(|i| {
+                std::array::from_fn(|a| {
+                    (uniform(seed, ((block * 8 + i) * D + a) as u64) - 0.5) * 30.0 * f64::from(period[a])
+                })
+            });
+            let eight = simd.n_sphere8_periodic(&x, &p);
+            for (i, &x) in x.iter().enumerate() {
+                let got = simd.n_sphere_periodic(x, &p);
+                assert_eq!(got.radius.to_bits(), eight.lane(i).radius.to_bits(), "{D}D {x:?}: one and eight");
+                let (radius, feature, neighbour) = periodic_n_sphere(config, period, x);
+                assert_eq!((got.feature, got.neighbour), (feature, neighbour), "{D}D {period:?} at {x:?}");
+                // In user units, as the lanes give it.
+                let want = radius / scale;
+                let allowed = bound(want, 1.0 / scale);
+                let error = (f64::from(got.radius) - want).abs();
+                assert!(error <= allowed, "{D}D {period:?} at {x:?}: {} against {want}", got.radius);
+                worst = worst.max(error / allowed);
+            }
+        }
+        worst
+    }
+    for (name, worst) in [
+        ("2D [3, 4]", go::<2>([3, 4], 1)),
+        ("2D [5, 3]", go::<2>([5, 3], 2)),
+        ("3D [3, 3, 4]", go::<3>([3, 3, 4], 3)),
+        ("4D [3, 3, 3, 3]", go::<4>([3, 3, 3, 3], 4)),
+    ] {
+        println!("periodic n-sphere {name}: worst error {worst:.3} of the bound");
+    }
+}
+
+/// Inside one period, away from its faces, the periodic pattern is the
+/// ordinary one, so the periodic radius of x (in cells) is the radius at
+/// the same cell and fraction, bit for bit; periods away it repeats.
+#[test]
+fn periodic_n_spheres_are_the_ordinary_ones_inside_a_period_and_repeat() {
+    let spheres = SimdNSphere::<2>::new(Config { seed: 2, ..Config::default() }).unwrap();
+    let period = Period::new([4096, 2048]).unwrap();
+    for i in 0..20_000 {
+        let cell = [20 + (i as i64 * 7) % 4000, 20 + (i as i64 * 13) % 2000];
+        let fraction = sample_point::<2>(11, i, 0.5).map(|v| (v + 0.5) as f32);
+        let x: [f64; 2] = std::array::from_fn(|a| cell[a] as f64 + f64::from(fraction[a]));
+        let periodic = spheres.n_sphere_periodic(x, &period);
+        assert_eq!(periodic, spheres.n_sphere_in_cell(cell, fraction), "at {x:?}");
+        assert!(periodic.radius > 0.0);
+        let shifted = [x[0] - 4096.0 * 2.0, x[1] + 2048.0 * 5.0];
+        assert_eq!(spheres.n_sphere_periodic(shifted, &period), periodic, "at {shifted:?}");
+    }
+    assert!(spheres.n_sphere_periodic([f64::NAN, 1.0], &period).radius.is_nan());
 }

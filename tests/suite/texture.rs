@@ -309,6 +309,7 @@ fn invalid_texture_parameters_are_rejected_with_the_reason() {
         (Texture::new(c, Combination::Smooth(-0.5), f, None), "smoothness -0.5"),
         (Texture::new(c, Combination::Smooth(0.3), f, Some(Period::new([4, 4, 4]).unwrap())), "does not tile"),
         (Texture::new(Config { metric: Metric::Manhattan, ..c }, Combination::Smooth(0.3), f, None), "Euclidean"),
+        (Texture::new(Config { metric: Metric::Chebyshev, ..c }, Combination::NSphere, f, None), "Euclidean"),
     ];
     for (result, words) in cases {
         let e = result.expect_err(words).to_string();
@@ -376,7 +377,10 @@ fn combinations_parse_from_their_written_form() {
     assert_eq!("0.5F1+2*F3-F1".parse::<Combination>(), Ok(Combination::Linear(vec![-0.5, 0.0, 2.0])));
     assert_eq!("smooth:0.25".parse::<Combination>(), Ok(Combination::Smooth(0.25)));
     assert_eq!(Combination::Smooth(0.25).name().parse::<Combination>(), Ok(Combination::Smooth(0.25)));
-    for bad in ["", "G1", "F0", "F17", "xF1", "F1+", "2", "smooth:", "smooth:-1", "smooth:inf", "smooth:x"] {
+    assert_eq!(Combination::NSphere.name().parse::<Combination>(), Ok(Combination::NSphere));
+    for bad in
+        ["", "G1", "F0", "F17", "xF1", "F1+", "2", "smooth:", "smooth:-1", "smooth:inf", "smooth:x", "n-sphere:1"]
+    {
         assert!(bad.parse::<Combination>().is_err(), "{bad:?} must be rejected");
     }
 }
@@ -414,6 +418,8 @@ fn texture_grids_give_each_points_value_on_every_path() {
     grid_matches_points(&border, &Grid { origin: [0.3, -1.7, 2.5], step: [0.04, 0.05, 0.3], size: [37, 21, 3] });
     let smooth = Texture::<3, 1>::new(c, Combination::Smooth(0.3), Fractal::octaves(3), None).unwrap();
     grid_matches_points(&smooth, &Grid { origin: [0.3, -1.7, 2.5], step: [0.04, 0.05, 0.3], size: [37, 21, 3] });
+    let spheres = Texture::<3, 1>::new(c, Combination::NSphere, Fractal::octaves(3), None).unwrap();
+    grid_matches_points(&spheres, &Grid { origin: [0.3, -1.7, 2.5], step: [0.04, 0.05, 0.3], size: [37, 21, 3] });
     let product = Config { metric: Metric::Manhattan, seed: 4, ..c };
     let t = Texture::<3, 2>::new(product, Combination::Product, Fractal::octaves(2), None).unwrap();
     grid_matches_points(&t, &Grid { origin: [10.0, 0.0, -0.5], step: [0.03, 0.0, 0.2], size: [64, 1, 5] });
@@ -476,6 +482,9 @@ fn one_point_calls_give_the_bits_of_their_lane_among_eight() {
     let smooth = Texture::<3, 1>::new(c, Combination::Smooth(0.2), Fractal::octaves(3), None).unwrap();
     one_point_is_its_lane(&smooth, &points, 0.0);
     one_point_is_its_lane(&smooth, &points, 0.3);
+    let spheres = Texture::<3, 1>::new(c, Combination::NSphere, Fractal::octaves(3), None).unwrap();
+    one_point_is_its_lane(&spheres, &points, 0.0);
+    one_point_is_its_lane(&spheres, &points, 0.3);
     let manhattan = Config { metric: Metric::Manhattan, ..c };
     let product = Texture::<3, 2>::new(manhattan, Combination::Product, Fractal::octaves(2), None).unwrap();
     one_point_is_its_lane(&product, &points, 0.05);
@@ -557,4 +566,45 @@ fn smooth_textures_are_the_fractal_sum_of_simd_smooth_with_its_gradient() {
             assert!((fd - f64::from(gradient[a])).abs() <= tol, "axis {a} at {x:?}: {} vs {fd}", gradient[a]);
         }
     }
+}
+
+/// The n-sphere texture is the fractal sum of `SimdNSphere`'s radii, with
+/// a zero gradient; periodic, the sum of the periodic radii, repeating
+/// bit for bit one period away.
+#[test]
+fn n_sphere_textures_are_the_fractal_sum_of_simd_n_sphere() {
+    let c = Config { seed: 6, ..Config::default() };
+    let fractal = Fractal { octaves: 3, lacunarity: 2.0, gain: 0.5 };
+    let kernel = worley::SimdNSphere::<3>::new(c).unwrap();
+    let t = Texture::<3, 1>::new(c, Combination::NSphere, fractal, None).unwrap();
+    let period = Period::new([3, 4, 5]).unwrap();
+    let tiled = Texture::<3, 1>::new(c, Combination::NSphere, fractal, Some(period)).unwrap();
+    for i in 0..300 {
+        // Dyadic, so that moving by whole periods is exact.
+        let x: [f64; 3] =
+            std::array::from_fn(|a| ((uniform(19, (i * 3 + a) as u64) - 0.5) * 204_800.0).floor() / 1024.0);
+        // Octave o at frequency 2^o with amplitude 0.5^o, summed in f32 in
+        // octave order; periodic octaves in cells, reduced into the base
+        // period first, with the period times 2^o.
+        let (mut want, mut want_tiled) = (0f32, 0f32);
+        for o in 0..3 {
+            let f = 2f64.powi(o);
+            let y = if o == 0 { x } else { x.map(|v| v * f) };
+            let cells = [3.0, 4.0, 5.0];
+            let z: [f64; 3] = std::array::from_fn(|a| x[a].rem_euclid(cells[a]) * f);
+            let p = Period::new([3, 4, 5].map(|c| c * (1 << o))).unwrap();
+            let (v, w) = (kernel.n_sphere(y).radius, kernel.n_sphere_periodic(z, &p).radius);
+            let amplitude = 0.5f32.powi(o);
+            want = if o == 0 { v } else { want + amplitude * v };
+            want_tiled = if o == 0 { w } else { want_tiled + amplitude * w };
+        }
+        assert_eq!(t.value(x).to_bits(), want.to_bits(), "at {x:?}");
+        assert!(want > 0.0 && want_tiled > 0.0, "at {x:?}");
+        let (sample, gradient) = t.gradient(x);
+        assert_eq!((sample.value.to_bits(), gradient), (want.to_bits(), [0.0; 3]), "at {x:?}");
+        assert_eq!(tiled.value(x).to_bits(), want_tiled.to_bits(), "tiled at {x:?}");
+        let moved = [x[0] + 3.0 * 7.0, x[1] - 4.0, x[2] + 5.0 * 2.0];
+        assert_eq!(tiled.value(moved).to_bits(), want_tiled.to_bits(), "tiled at {moved:?}");
+    }
+    assert!(t.value([f64::NAN, 0.0, 0.0]).is_nan() && tiled.value([0.0, f64::INFINITY, 0.0]).is_nan());
 }

@@ -32,9 +32,11 @@ use wide::{f32x8, u32x8};
 
 use super::super::batch::in_cell;
 use super::super::best::Best;
+use super::super::generate::UNIT;
 use super::super::lanes::{Eight, Lanes, One, WIDEST};
 use super::super::locate::Located;
-use super::super::{by_eights, Grid, Outputs, Point, Simd, SizeError};
+use super::super::periodic::wrap;
+use super::super::{by_eights, Grid, Outputs, Period, Point, Simd, SizeError};
 use super::search::Frame;
 use crate::config::{Config, ConfigError, Metric};
 use crate::definition::{FRACTION_BITS, INVALID_ID};
@@ -81,6 +83,15 @@ impl NSphere8 {
     /// Every lane.
     pub fn lanes(&self) -> [NSphere32; 8] {
         std::array::from_fn(|i| self.lane(i))
+    }
+
+    /// One sample's result in all eight lanes.
+    pub fn splat(n: &NSphere32) -> Self {
+        NSphere8 {
+            radius: f32x8::splat(n.radius),
+            feature: u32x8::splat(n.feature),
+            neighbour: u32x8::splat(n.neighbour),
+        }
     }
 }
 
@@ -137,7 +148,7 @@ impl<const D: usize> SimdNSphere<D> {
     /// One sample, through the kernel's one-lane instantiation: the bits of
     /// its lane in [`SimdNSphere::n_sphere8`].
     pub fn n_sphere(&self, x: [f64; D]) -> NSphere32 {
-        self.one(&self.first.locate::<One>(&[x]))
+        self.one(&self.first.locate::<One>(&[x]), None)
     }
 
     /// Eight samples, one per lane.
@@ -149,18 +160,40 @@ impl<const D: usize> SimdNSphere<D> {
     /// assert_eq!(spheres.n_sphere8(&x).lane(5), spheres.n_sphere(x[5]));
     /// ```
     pub fn n_sphere8(&self, x: &[[f64; D]; 8]) -> NSphere8 {
-        self.eight(&self.first.locate::<Eight>(x))
+        self.eight(&self.first.locate::<Eight>(x), None)
     }
 
     /// One sample given as a cell and the fraction within it, as
     /// [`Simd::evaluate_in_cell`] takes it (bad input as there).
     pub fn n_sphere_in_cell(&self, cell: [i64; D], fraction: [f32; D]) -> NSphere32 {
-        self.one(&in_cell::<One, D>(&[cell], &[fraction]))
+        self.one(&in_cell::<One, D>(&[cell], &[fraction]), None)
     }
 
     /// Eight samples given as cells and fractions.
     pub fn n_sphere8_in_cell(&self, cells: &[[i64; D]; 8], fractions: &[[f32; D]; 8]) -> NSphere8 {
-        self.eight(&in_cell::<Eight, D>(cells, fractions))
+        self.eight(&in_cell::<Eight, D>(cells, fractions), None)
+    }
+
+    /// One sample of the periodic pattern, `x` in cells, as
+    /// [`Simd::evaluate_periodic`] takes it: F1's point and its nearest
+    /// other point are searched among the periodic images. Inside one
+    /// period, away from its faces, the ordinary pattern's radius.
+    ///
+    /// ```
+    /// use worley::{Config, Period, SimdNSphere};
+    /// let spheres = SimdNSphere::<2>::new(Config::default()).unwrap();
+    /// let period = Period::new([3, 4]).unwrap();
+    /// let (a, b) = (spheres.n_sphere_periodic([0.25, 1.5], &period), spheres.n_sphere_periodic([3.25, -2.5], &period));
+    /// assert_eq!((a.radius.to_bits(), a.neighbour), (b.radius.to_bits(), b.neighbour));
+    /// ```
+    pub fn n_sphere_periodic(&self, x: [f64; D], period: &Period<D>) -> NSphere32 {
+        self.one(&wrap::<One, D>(&[x], period), Some(period))
+    }
+
+    /// Eight samples of the periodic pattern, `x` in cells; lane `i` is
+    /// bit-identical to [`SimdNSphere::n_sphere_periodic`] of `x[i]`.
+    pub fn n_sphere8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>) -> NSphere8 {
+        self.eight(&wrap::<Eight, D>(x, period), Some(period))
     }
 
     /// Many points into a caller's buffer, eight at a time.
@@ -184,29 +217,29 @@ impl<const D: usize> SimdNSphere<D> {
         Ok(())
     }
 
-    /// One located sample.
-    fn one(&self, at: &Located<One, D>) -> NSphere32 {
+    /// One located sample (`period` the pattern's, if it has one).
+    fn one(&self, at: &Located<One, D>, period: Option<&Period<D>>) -> NSphere32 {
         let (_, _, raw) = self.first.dispatch_one(at);
         let c = self.centres::<One>(at, &raw);
         if !c.found[0] {
             return NSphere32::INVALID;
         }
-        let f = self.around.evaluate_in_cell(c.cell[0], c.fraction[0]);
-        sphere(c.feature[0], f.distance, f.id)
+        let f = self.around.dispatch_one(&centred::<One, D>(&c.cell, &c.fraction, period)).0;
+        sphere(c.feature[0], f.rank, f.id)
     }
 
-    /// Eight located samples.
-    fn eight(&self, at: &Located<Eight, D>) -> NSphere8 {
+    /// Eight located samples (`period` the pattern's, if it has one).
+    fn eight(&self, at: &Located<Eight, D>, period: Option<&Period<D>>) -> NSphere8 {
         let (_, _, raw) = self.first.dispatch8_whole(at);
         let c = self.centres::<Eight>(at, &raw);
         // Lanes without a centre are evaluated at a valid stand-in and
         // their result replaced.
         let cells: [[i64; D]; 8] = std::array::from_fn(|i| if c.found[i] { c.cell[i] } else { [0; D] });
         let fractions: [[f32; D]; 8] = std::array::from_fn(|i| if c.found[i] { c.fraction[i] } else { [0.0; D] });
-        let f = self.around.evaluate8_in_cell(&cells, &fractions);
+        let f = self.around.dispatch8(&centred::<Eight, D>(&cells, &fractions, period));
         let lanes: [NSphere32; 8] = std::array::from_fn(|i| {
             if c.found[i] {
-                sphere(c.feature[i], f.distance.map(|v| v.to_array()[i]), f.id.map(|v| v.to_array()[i]))
+                sphere(c.feature[i], f.rank.map(|v| v.to_array()[i]), f.id.map(|v| v.to_array()[i]))
             } else {
                 NSphere32::INVALID
             }
@@ -256,6 +289,30 @@ impl<const D: usize> SimdNSphere<D> {
         }
         c
     }
+}
+
+/// The centres as the kernel of order 2 takes them: a cell and its
+/// fraction ([`Simd::evaluate_in_cell`]), the cell wrapped into the period
+/// where the pattern has one (the centre of a sample near a face may lie
+/// in the cell beyond it).
+fn centred<L: Lanes, const D: usize>(
+    cells: &[[i64; D]],
+    fractions: &[[f32; D]],
+    period: Option<&Period<D>>,
+) -> Located<L, D> {
+    let Some(period) = period else {
+        return in_cell::<L, D>(cells, fractions);
+    };
+    let p = period.cells().map(i64::from);
+    let mut cell = [[0i64; WIDEST]; D];
+    let mut f = [[0f32; WIDEST]; D];
+    for i in 0..L::N {
+        for a in 0..D {
+            cell[a][i] = cells[i][a].rem_euclid(p[a]);
+            f[a][i] = fractions[i][a] * UNIT;
+        }
+    }
+    Located::wrapped(cell, &f, [true; WIDEST], Some(p))
 }
 
 /// The radius and the neighbour from F1 and F2 (`distance`, `id`) at the
