@@ -130,7 +130,6 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             _ => None,
         };
         let smooth = match combination {
-            Combination::Smooth(_) if period.is_some() => return Err(TextureError::SmoothPeriod),
             Combination::Smooth(s) => Some((SimdSmooth::new(config)?, s)),
             _ => None,
         };
@@ -444,9 +443,12 @@ impl<const D: usize, const N: usize> Texture<D, N> {
             return Some((n.radius, [zero; D]));
         }
         let (smooth, s) = self.smooth.as_ref()?;
-        // Never periodic: such textures are refused.
-        let (y, _) = self.octave(x, frequency, None);
-        let v = if ONE { Smooth8::splat(&smooth.smooth(y[0], *s)) } else { smooth.smooth8(&y, *s) };
+        let v = match (self.octave(x, frequency, period), ONE) {
+            ((y, Some(p)), true) => Smooth8::splat(&smooth.smooth_periodic(y[0], &p, *s)),
+            ((y, None), true) => Smooth8::splat(&smooth.smooth(y[0], *s)),
+            ((y, Some(p)), false) => smooth.smooth8_periodic(&y, &p, *s),
+            ((y, None), false) => smooth.smooth8(&y, *s),
+        };
         Some((v.value, v.gradient))
     }
 

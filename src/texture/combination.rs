@@ -20,10 +20,10 @@ pub enum Combination {
     /// where F2 − F1 widens between close pairs. Euclidean only; its
     /// gradient is the border plane's normal.
     Border,
-    /// Compact smooth F1 with smoothness `s` (a length in the octave's
-    /// coordinates: user units at the first octave, cells for a periodic
-    /// texture, which does not take it yet) ([`SimdSmooth`](crate::SimdSmooth)):
-    /// rounded cells, C∞, with an analytic gradient. Euclidean only.
+    /// Compact smooth F1 with smoothness `s` ([`SimdSmooth`](crate::SimdSmooth)):
+    /// rounded cells, C∞, with an analytic gradient. `s` is a length in
+    /// the units of the octave's F1 (user units, periodic textures too),
+    /// so each octave is rounded alike. Euclidean only.
     Smooth(f32),
     /// The n-sphere radius ([`SimdNSphere`](crate::SimdNSphere)): half the
     /// distance from F1's point to its nearest other point, constant over

@@ -89,9 +89,6 @@ pub enum TextureError {
     /// The smoothness of [`Combination::Smooth`](super::Combination::Smooth)
     /// is negative, infinite or NaN.
     Smoothness(f32),
-    /// [`Combination::Smooth`](super::Combination::Smooth) with a period:
-    /// compact smooth F1 has no periodic form yet.
-    SmoothPeriod,
 }
 
 impl std::fmt::Display for TextureError {
@@ -114,9 +111,6 @@ impl std::fmt::Display for TextureError {
             }
             TextureError::Gain(g) => write!(f, "gain {g} is invalid: use 0 < gain <= 1"),
             TextureError::Smoothness(v) => write!(f, "smoothness {v} is invalid: use a finite number >= 0"),
-            TextureError::SmoothPeriod => {
-                write!(f, "smooth F1 does not tile yet: drop the period or use another combination")
-            }
             TextureError::Octaves { octaves, lacunarity, gain } => write!(
                 f,
                 "{octaves} octaves (lacunarity {lacunarity}, gain {gain}) are not resolved in f32: use 1 to 64, \

@@ -18,6 +18,7 @@
 mod border;
 mod coherent;
 mod hard_cases;
+mod images;
 mod levels;
 mod nsphere;
 mod simd;

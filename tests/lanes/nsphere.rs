@@ -4,7 +4,7 @@
 //! its images, the same bits through every entry point, and bad lanes kept
 //! to themselves.
 
-use worley::definition::FRACTION_ULP;
+use super::images::{d2, nearest, periodic_images};
 use worley::{Config, ConfigError, Grid, Metric, Mode, NSphere32, Period, Reference, SimdNSphere, INVALID_ID};
 use worley_harness::{chunked, sample_point, uniform};
 
@@ -136,51 +136,16 @@ fn simd_n_sphere_keeps_bad_lanes_to_themselves_and_refuses_other_metrics() {
     }
 }
 
-/// Brute force over the periodic point set (`x` and the answer's radius in
-/// cells): every point of one period at shifts −2..=2 periods per axis,
-/// F1's image the nearest to `x` (the smallest ID among equals), then the
+/// Brute force over the periodic point set (`x` and the radius in cells):
+/// F1's image the nearest to `x` (reduced into the period), then the
 /// nearest other image to it. Returns (radius in cells, centre ID,
 /// neighbour ID).
 fn periodic_n_sphere<const D: usize>(config: Config, period: [u32; D], x: [f64; D]) -> (f64, u32, u32) {
-    let pattern = Reference::<D>::new(config).unwrap().pattern().clone();
-    let mut images: Vec<([f64; D], u32)> = Vec::new();
-    let cells: usize = period.iter().map(|&p| p as usize).product();
-    for index in 0..cells {
-        let mut rest = index;
-        let cell: [i64; D] = std::array::from_fn(|a| {
-            let c = rest % period[a] as usize;
-            rest /= period[a] as usize;
-            c as i64
-        });
-        for point in pattern.points(cell) {
-            for shift in 0..5usize.pow(D as u32) {
-                let mut rest = shift;
-                let at: [f64; D] = std::array::from_fn(|a| {
-                    let k = (rest % 5) as f64 - 2.0;
-                    rest /= 5;
-                    cell[a] as f64 + k * f64::from(period[a]) + f64::from(point.fraction[a]) * FRACTION_ULP
-                });
-                images.push((at, point.id));
-            }
-        }
-    }
+    let images = periodic_images(config, period);
     let r: [f64; D] = std::array::from_fn(|a| x[a].rem_euclid(f64::from(period[a])));
-    let d2 = |p: &[f64; D], q: &[f64; D]| (0..D).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>();
-    let key = |d: f64, id: u32| (d, id);
-    let centre = images
-        .iter()
-        .enumerate()
-        .min_by(|a, b| key(d2(&a.1 .0, &r), a.1 .1).partial_cmp(&key(d2(&b.1 .0, &r), b.1 .1)).unwrap())
-        .unwrap();
-    let (c, (cp, cid)) = (centre.0, *centre.1);
-    let neighbour = images
-        .iter()
-        .enumerate()
-        .filter(|&(j, _)| j != c)
-        .min_by(|a, b| key(d2(&a.1 .0, &cp), a.1 .1).partial_cmp(&key(d2(&b.1 .0, &cp), b.1 .1)).unwrap())
-        .unwrap()
-        .1;
-    (0.5 * d2(&neighbour.0, &cp).sqrt(), cid, neighbour.1)
+    let c = nearest(&images, &r, None);
+    let n = nearest(&images, &images[c].0, Some(c));
+    (0.5 * d2(&images[n].0, &images[c].0).sqrt(), images[c].1, images[n].1)
 }
 
 /// The periodic radius (`n_sphere_periodic`, eight lanes and one) against

@@ -1,10 +1,14 @@
 //! Compact smooth F1 in lanes (`SimdSmooth`) against the f64 reference
 //! (`Reference::smooth_f1_compact`, itself held to brute force in
-//! `tests/suite/compact.rs`), the same bits through every entry point, and
-//! bad lanes kept to themselves.
+//! `tests/suite/compact.rs`), the periodic pattern against brute force
+//! over its images, the same bits through every entry point, and bad lanes
+//! kept to themselves.
 
-use worley::{Config, ConfigError, Grid, Metric, Mode, Outputs, Reference, Simd, SimdSmooth, Smooth32, INVALID_ID};
-use worley_harness::{chunked, sample_point};
+use super::images::{d2, nearest, periodic_images};
+use worley::{
+    Config, ConfigError, Grid, Metric, Mode, Outputs, Period, Reference, Simd, SimdSmooth, Smooth32, INVALID_ID,
+};
+use worley_harness::{chunked, sample_point, uniform};
 
 /// The stated bound: S moves by at most the largest F_j error of the
 /// points within the reach R, 4ε(R + 1/S_p), plus S's own f32 rounding.
@@ -58,8 +62,8 @@ fn simd_smooth_agrees_with_the_reference_in_every_dimension() {
                 4 => ("4D s 0.3", agrees::<4>(c(0, 5.0), 0.3, 5, 10_000, 1000.0)),
                 // Sparse points per cell: the reach spans shells of cells.
                 5 => ("3D λ 0.5 s 0.3", agrees::<3>(c(7, 0.5), 0.3, 6, 20_000, 1000.0)),
-                // More points within reach than a lane keeps: the f64
-                // reference's value, rounded.
+                // More points within reach than a lane keeps on the
+                // stack: the lane searches again alone and keeps them all.
                 6 => ("3D s 1.5", agrees::<3>(c(0, 5.0), 1.5, 7, 3_000, 1000.0)),
                 // Windows that hold no point: +∞, as the reference says.
                 _ => ("2D window λ 0.3 s 0.3", agrees::<2>(window(2, 0.3), 0.3, 8, 20_000, 100.0)),
@@ -151,4 +155,121 @@ fn simd_smooth_keeps_bad_lanes_to_themselves_and_refuses_other_metrics() {
         let config = Config { metric, ..Config::default() };
         assert_eq!(SimdSmooth::<3>::new(config).unwrap_err(), ConfigError::BorderMetric(metric));
     }
+}
+
+/// Compact smooth F1 by brute force over the periodic images (`x` in
+/// cells, `s` and the result in user units, `scale` cells per user unit):
+/// every image's h, the root of Σ φ((h_j − S)/s) = 1 by plain bisection,
+/// the gradient as the weighted mean of ∇h_j. Returns (S, ∇S, F1's ID,
+/// the reach).
+fn periodic_smooth<const D: usize>(
+    images: &[([f64; D], u32)],
+    period: [u32; D],
+    x: [f64; D],
+    s: f64,
+    scale: f64,
+) -> (f64, [f64; D], u32, f64) {
+    let r: [f64; D] = std::array::from_fn(|a| x[a].rem_euclid(f64::from(period[a])));
+    let first = nearest(images, &r, None);
+    let f1 = d2(&images[first].0, &r).sqrt() / scale;
+    let h1 = f1.hypot(s) - s;
+    let reach = ((h1 + 2.0 * s).powi(2) - s * s).sqrt();
+    // (h_j, ∇h_j) of the images within the reach.
+    let near: Vec<(f64, [f64; D])> = images
+        .iter()
+        .filter_map(|(p, _)| {
+            let f = d2(p, &r).sqrt() / scale;
+            let root = f.hypot(s);
+            (f < reach).then(|| (root - s, std::array::from_fn(|a| (r[a] - p[a]) / scale / root)))
+        })
+        .collect();
+    let phi = |t: f64| if t < 1.0 { (1.0 - 1.0 / (1.0 - t)).exp() } else { 0.0 };
+    let total = |v: f64| near.iter().map(|(h, _)| phi((h - v) / s)).sum::<f64>();
+    let (mut lo, mut hi) = (h1 - s, h1);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if total(mid) >= 1.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let (mut weight, mut gradient) = (0.0, [0.0; D]);
+    for (h, g) in &near {
+        let t = (h - hi) / s;
+        let w = if t < 1.0 { phi(t) / ((1.0 - t) * (1.0 - t)) } else { 0.0 };
+        weight += w;
+        for (sum, g) in gradient.iter_mut().zip(g) {
+            *sum += w * g;
+        }
+    }
+    (hi, gradient.map(|g| g / weight), images[first].1, reach)
+}
+
+/// The periodic value (`smooth_periodic`, one lane and eight) against brute
+/// force over the periodic images, for periods of a few cells where the
+/// search wraps around; s = 1.5 keeps more points than fit on the stack.
+#[test]
+fn periodic_smooth_agrees_with_brute_force_over_periodic_images() {
+    fn go<const D: usize>(period: [u32; D], s: f32, seed: u64) -> (f64, f64) {
+        let config = Config { seed, ..Config::default() };
+        let simd = SimdSmooth::<D>::new(config).unwrap();
+        let p = Period::new(period).unwrap();
+        let scale = Reference::<D>::new(config).unwrap().pattern().scale();
+        let images = periodic_images(config, period);
+        let (mut worst, mut worst_gradient) = (0f64, 0f64);
+        for block in 0..25 {
+            let x: [[f64; D]; 8] = std::array::from_fn(|i| {
+                std::array::from_fn(|a| {
+                    (uniform(seed, ((block * 8 + i) * D + a) as u64) - 0.5) * 30.0 * f64::from(period[a])
+                })
+            });
+            let eight = simd.smooth8_periodic(&x, &p, s);
+            for (i, &x) in x.iter().enumerate() {
+                let got = simd.smooth_periodic(x, &p, s);
+                assert_eq!(got, eight.lane(i), "{D}D {x:?}: one and eight");
+                let (value, gradient, feature, reach) = periodic_smooth(&images, period, x, f64::from(s), scale);
+                assert_eq!(got.feature, feature, "{D}D {period:?} s {s} at {x:?}");
+                let allowed = bound(reach, value, 1.0 / scale);
+                let error = (f64::from(got.value) - value).abs();
+                assert!(error <= allowed, "{D}D {period:?} s {s} at {x:?}: {} against {value}", got.value);
+                worst = worst.max(error / allowed);
+                for (g, want) in got.gradient.iter().zip(gradient) {
+                    worst_gradient = worst_gradient.max((f64::from(*g) - want).abs());
+                }
+            }
+        }
+        (worst, worst_gradient)
+    }
+    for (name, (worst, gradient)) in [
+        ("2D [3, 4] s 0.3", go::<2>([3, 4], 0.3, 1)),
+        ("2D [5, 3] s 1.5", go::<2>([5, 3], 1.5, 2)),
+        ("3D [3, 3, 4] s 0.1", go::<3>([3, 3, 4], 0.1, 3)),
+        ("3D [3, 4, 3] s 1.5", go::<3>([3, 4, 3], 1.5, 4)),
+        ("4D [3, 3, 3, 3] s 0.3", go::<4>([3, 3, 3, 3], 0.3, 5)),
+    ] {
+        println!("periodic smooth F1 {name}: worst value error {worst:.3} of the bound, gradient {gradient:.2e}");
+        assert!(gradient < 2e-4, "{name}: gradient error {gradient}");
+    }
+}
+
+/// Inside one period, away from its faces, the periodic pattern is the
+/// ordinary one, so periodic smooth F1 of x (in cells) is the value at the
+/// same cell and fraction, bit for bit; periods away it repeats.
+#[test]
+fn periodic_smooth_is_the_ordinary_one_inside_a_period_and_repeats() {
+    let simd = SimdSmooth::<2>::new(Config { seed: 2, ..Config::default() }).unwrap();
+    let period = Period::new([4096, 2048]).unwrap();
+    for s in [0.3, 1.5] {
+        for i in 0..5_000 {
+            let cell = [20 + (i as i64 * 7) % 4000, 20 + (i as i64 * 13) % 2000];
+            let fraction = sample_point::<2>(11, i, 0.5).map(|v| (v + 0.5) as f32);
+            let x: [f64; 2] = std::array::from_fn(|a| cell[a] as f64 + f64::from(fraction[a]));
+            let periodic = simd.smooth_periodic(x, &period, s);
+            assert_eq!(periodic, simd.smooth_in_cell(cell, fraction, s), "s {s} at {x:?}");
+            let shifted = [x[0] - 4096.0 * 2.0, x[1] + 2048.0 * 5.0];
+            assert_eq!(simd.smooth_periodic(shifted, &period, s), periodic, "s {s} at {shifted:?}");
+        }
+    }
+    assert!(simd.smooth_periodic([f64::NAN, 1.0], &period, 0.3).value.is_nan());
 }

@@ -307,7 +307,6 @@ fn invalid_texture_parameters_are_rejected_with_the_reason() {
         (Texture::new(c, Combination::Product, Fractal { gain: f32::INFINITY, ..f }, None), "gain inf"),
         (Texture::new(Config { density: -1.0, ..c }, Combination::Product, f, None), "density -1"),
         (Texture::new(c, Combination::Smooth(-0.5), f, None), "smoothness -0.5"),
-        (Texture::new(c, Combination::Smooth(0.3), f, Some(Period::new([4, 4, 4]).unwrap())), "does not tile"),
         (Texture::new(Config { metric: Metric::Manhattan, ..c }, Combination::Smooth(0.3), f, None), "Euclidean"),
         (Texture::new(Config { metric: Metric::Chebyshev, ..c }, Combination::NSphere, f, None), "Euclidean"),
     ];
@@ -531,9 +530,13 @@ fn smooth_textures_are_the_fractal_sum_of_simd_smooth_with_its_gradient() {
     let fractal = Fractal { octaves: 3, lacunarity: 2.0, gain: 0.5 };
     let s = 0.3;
     let t = Texture::<3, 1>::new(c, Combination::Smooth(s), fractal, None).unwrap();
+    let tiled =
+        Texture::<3, 1>::new(c, Combination::Smooth(s), fractal, Some(Period::new([3, 4, 5]).unwrap())).unwrap();
     let kernel = worley::SimdSmooth::<3>::new(c).unwrap();
     for i in 0..300 {
-        let x: [f64; 3] = std::array::from_fn(|a| (uniform(17, (i * 3 + a) as u64) - 0.5) * 200.0);
+        // Dyadic, so that moving by whole periods is exact.
+        let x: [f64; 3] =
+            std::array::from_fn(|a| ((uniform(17, (i * 3 + a) as u64) - 0.5) * 204_800.0).floor() / 1024.0);
         // Octave o at frequency 2^o with amplitude 0.5^o, summed in f32 in
         // octave order; its gradient is frequency · amplitude · ∇S.
         let (mut want, mut want_gradient) = (0f32, [0f32; 3]);
@@ -548,6 +551,19 @@ fn smooth_textures_are_the_fractal_sum_of_simd_smooth_with_its_gradient() {
             }
         }
         assert_eq!(t.value(x).to_bits(), want.to_bits(), "at {x:?}");
+        // Periodic: octave o in cells, reduced into the base period, with
+        // the period times 2^o; the same bits one period away.
+        let cells = [3.0, 4.0, 5.0];
+        let mut want_tiled = 0f32;
+        for o in 0..3 {
+            let z: [f64; 3] = std::array::from_fn(|a| x[a].rem_euclid(cells[a]) * 2f64.powi(o));
+            let p = Period::new([3, 4, 5].map(|c| c << o)).unwrap();
+            let v = kernel.smooth_periodic(z, &p, s).value;
+            want_tiled = if o == 0 { v } else { want_tiled + 0.5f32.powi(o) * v };
+        }
+        assert_eq!(tiled.value(x).to_bits(), want_tiled.to_bits(), "tiled at {x:?}");
+        let moved = [x[0] - 3.0 * 5.0, x[1] + 4.0 * 3.0, x[2]];
+        assert_eq!(tiled.value(moved).to_bits(), want_tiled.to_bits(), "tiled at {moved:?}");
         let (sample, gradient) = t.gradient(x);
         assert!(sample.defined, "at {x:?}");
         for a in 0..3 {

@@ -21,8 +21,13 @@
 //!    step (S = h_1). The gradient is the weighted mean of the ∇h_j.
 //!
 //! A lane with more than [`KEPT`] points within reach (s well beyond the
-//! spacing of the points) is evaluated by the f64 reference at the lane's
-//! own position (its cell and its 24-bit fraction) and rounded to f32.
+//! spacing of the points) searches again alone, keeping every point on
+//! the heap, and takes the same root: the same operations in the same
+//! order, so the same bits as if it had fitted.
+//!
+//! The periodic entry points ([`SimdSmooth::smooth_periodic`]) run the
+//! same steps on the periodic pattern: the kernel's periodic F1, and cells
+//! wrapped into the period in the search around it.
 //!
 //! ## Error
 //! S moves with each h_j by a weight between 0 and 1, the weights summing
@@ -47,16 +52,17 @@ use super::super::best::Best;
 use super::super::generate::UNIT;
 use super::super::lanes::{Eight, Lanes, One, WIDEST};
 use super::super::locate::Located;
+use super::super::periodic::wrap;
 use super::super::search::outside;
-use super::super::{by_eights, Grid, Outputs, Point, Simd, SizeError};
+use super::super::{by_eights, Grid, Outputs, Period, Point, Simd, SizeError};
 use super::search::{CellAt, Frame};
 use super::SLACK;
 use crate::config::{Config, ConfigError, Metric, Mode};
 use crate::definition::INVALID_ID;
-use crate::reference::{shell, Reference, MAX_SHELLS};
+use crate::reference::{shell, MAX_SHELLS};
 
-/// Points within reach kept per lane for the root; a lane with more is
-/// evaluated by the f64 reference.
+/// Points within reach kept per lane on the stack for the root; a lane
+/// with more searches again alone and keeps them on the heap.
 pub const KEPT: usize = 24;
 
 /// One sample's compact smooth F1 (user units), its gradient and F1's ID.
@@ -136,8 +142,12 @@ impl<const D: usize> Smooth8<D> {
 pub struct SimdSmooth<const D: usize> {
     /// F1 with its delta and ID.
     first: Simd<D, 1>,
-    /// For lanes with more than [`KEPT`] points within reach.
-    reference: Reference<D>,
+}
+
+/// Where the search around F1 puts the points within reach.
+trait Collect<const D: usize> {
+    /// One point, in the lanes of the bit mask `inside`.
+    fn push<L: Lanes>(&mut self, inside: u32, d2: L::F, delta: &[L::F; D]);
 }
 
 /// The points within reach, per lane in the order met: squared distance
@@ -153,8 +163,29 @@ impl<const D: usize> Near<D> {
     fn new() -> Self {
         Near { count: [0; WIDEST], d2: [[0.0; KEPT]; WIDEST], delta: [[[0.0; D]; KEPT]; WIDEST] }
     }
+}
 
-    /// One point, in the lanes of the bit mask `inside`.
+/// Every point within reach of a one-lane search, however many.
+struct All<const D: usize> {
+    d2: Vec<f32>,
+    delta: Vec<[f32; D]>,
+}
+
+impl<const D: usize> Collect<D> for All<D> {
+    fn push<L: Lanes>(&mut self, inside: u32, d2: L::F, delta: &[L::F; D]) {
+        if inside & 1 != 0 {
+            let mut v = [0f32; WIDEST];
+            L::f_store(d2, &mut v[..L::N]);
+            self.d2.push(v[0]);
+            self.delta.push(std::array::from_fn(|a| {
+                L::f_store(delta[a], &mut v[..L::N]);
+                v[0]
+            }));
+        }
+    }
+}
+
+impl<const D: usize> Collect<D> for Near<D> {
     #[inline(always)]
     fn push<L: Lanes>(&mut self, inside: u32, d2: L::F, delta: &[L::F; D]) {
         let mut d2s = [0f32; WIDEST];
@@ -187,8 +218,7 @@ impl<const D: usize> SimdSmooth<D> {
         if !matches!(config.metric, Metric::Euclidean) {
             return Err(ConfigError::BorderMetric(config.metric));
         }
-        let config = Config { order: 1, ..config };
-        Ok(SimdSmooth { first: Simd::new(config, Outputs::IdsAndDeltas)?, reference: Reference::new(config)? })
+        Ok(SimdSmooth { first: Simd::new(Config { order: 1, ..config }, Outputs::IdsAndDeltas)? })
     }
 
     /// The configuration (order 1).
@@ -225,6 +255,28 @@ impl<const D: usize> SimdSmooth<D> {
         self.eight(&in_cell::<Eight, D>(cells, fractions), s)
     }
 
+    /// One sample of the periodic pattern, `x` in cells, as
+    /// [`Simd::evaluate_periodic`] takes it; `s` in user units, as the
+    /// value. Inside one period, away from its faces, the ordinary
+    /// pattern's value.
+    ///
+    /// ```
+    /// use worley::{Config, Period, SimdSmooth};
+    /// let smooth = SimdSmooth::<2>::new(Config::default()).unwrap();
+    /// let period = Period::new([3, 4]).unwrap();
+    /// let (a, b) = (smooth.smooth_periodic([0.25, 1.5], &period, 0.3), smooth.smooth_periodic([3.25, -2.5], &period, 0.3));
+    /// assert_eq!(a.value.to_bits(), b.value.to_bits());
+    /// ```
+    pub fn smooth_periodic(&self, x: [f64; D], period: &Period<D>, s: f32) -> Smooth32<D> {
+        self.one(&wrap::<One, D>(&[x], period), s)
+    }
+
+    /// Eight samples of the periodic pattern, `x` in cells; lane `i` is
+    /// bit-identical to [`SimdSmooth::smooth_periodic`] of `x[i]`.
+    pub fn smooth8_periodic(&self, x: &[[f64; D]; 8], period: &Period<D>, s: f32) -> Smooth8<D> {
+        self.eight(&wrap::<Eight, D>(x, period), s)
+    }
+
     /// Many points into a caller's buffer, eight at a time.
     ///
     /// # Errors
@@ -249,7 +301,7 @@ impl<const D: usize> SimdSmooth<D> {
     /// One located sample.
     fn one(&self, at: &Located<One, D>, s: f32) -> Smooth32<D> {
         let (best, _, raw) = self.first.dispatch_one(at);
-        let search = |reach, near: &mut Near<D>| self.first.near_points::<One>(at, reach, near);
+        let search = |reach, near: &mut Near<D>| self.first.near_points::<One, _>(at, reach, near);
         self.lanes::<One>(at, &best, &raw, s, search)[0]
     }
 
@@ -317,20 +369,31 @@ impl<const D: usize> SimdSmooth<D> {
         for i in (0..L::N).filter(|&i| open[i]) {
             out[i] = if uncertified & (1 << i) != 0 {
                 Smooth32::INVALID
-            } else if near.count[i] > KEPT {
-                // The lane's own position: its cell and its 24-bit fraction.
-                let cells = at.cells_i64();
-                let fraction: [f64; D] = std::array::from_fn(|a| {
-                    let mut f = [0f32; WIDEST];
-                    L::f_store(at.f[a], &mut f[..L::N]);
-                    f64::from(f[i]) / f64::from(UNIT)
-                });
-                let cell: [i64; D] = std::array::from_fn(|a| cells[a][i]);
-                let r = self.reference.smooth_f1_compact_in_cell(cell, fraction, f64::from(s));
-                Smooth32 { value: r.value as f32, gradient: r.gradient.map(|g| g as f32), feature: r.feature }
             } else {
                 let n = near.count[i];
-                let (value, gradient) = root(&near.d2[i][..n], &near.delta[i][..n], sl);
+                let (value, gradient) = if n > KEPT {
+                    // The lane alone, at its own cell, fraction and period:
+                    // the same cells in the same order, so the same points.
+                    let cells = at.cells_i64();
+                    let mut f = [[0f32; WIDEST]; D];
+                    for (out, v) in f.iter_mut().zip(&at.f) {
+                        L::f_store(*v, &mut out[..L::N]);
+                    }
+                    let mut cell = [[0i64; WIDEST]; D];
+                    let mut fraction = [[0f32; WIDEST]; D];
+                    for a in 0..D {
+                        cell[a][0] = cells[a][i];
+                        fraction[a][0] = f[a][i];
+                    }
+                    let alone = Located::<One, D>::wrapped(cell, &fraction, [true; WIDEST], at.period);
+                    let mut all = All { d2: Vec::with_capacity(2 * n), delta: Vec::with_capacity(2 * n) };
+                    self.first.near_points::<One, _>(&alone, One::f(reach[i]), &mut all);
+                    let (mut part, mut weights) = (vec![(0f64, 0usize); all.d2.len()], vec![0f64; all.d2.len()]);
+                    solve(&all.d2, &all.delta, sl, &mut part, &mut weights)
+                } else {
+                    let (mut part, mut weights) = ([(0f64, 0usize); KEPT], [0f64; KEPT]);
+                    solve(&near.d2[i][..n], &near.delta[i][..n], sl, &mut part[..n], &mut weights[..n])
+                };
                 Smooth32 { value: (value / unit) as f32, gradient: gradient.map(|g| g as f32), feature: id[i] }
             };
         }
@@ -340,22 +403,26 @@ impl<const D: usize> SimdSmooth<D> {
 
 /// S (lane units) and ∇S from the points within reach (squared distances
 /// and deltas, lane units, at least F1's point), `sl` the smoothness in
-/// lane units.
-fn root<const D: usize>(d2: &[f32], delta: &[[f32; D]], sl: f64) -> (f64, [f64; D]) {
+/// lane units; `part` and `weights` are scratch, as long as `d2`.
+fn solve<const D: usize>(
+    d2: &[f32],
+    delta: &[[f32; D]],
+    sl: f64,
+    part: &mut [(f64, usize)],
+    weights: &mut [f64],
+) -> (f64, [f64; D]) {
     // Per point: √(F² + s²) and h = √(F² + s²) − s.
-    let mut roots = [0f64; KEPT];
-    for (r, &d) in roots.iter_mut().zip(d2) {
-        *r = (f64::from(d) + sl * sl).sqrt();
+    for (j, (p, &d)) in part.iter_mut().zip(d2).enumerate() {
+        *p = ((f64::from(d) + sl * sl).sqrt(), j);
     }
-    let roots = &roots[..d2.len()];
-    let h1 = roots.iter().fold(f64::INFINITY, |m, &r| m.min(r - sl));
+    let h1 = part.iter().fold(f64::INFINITY, |m, &(r, _)| m.min(r - sl));
     // The points that take part: t = (h − S)/s < 1 at S = h1 (t only grows
-    // as S falls below h1), with their deltas.
-    let mut part = [(0f64, 0usize); KEPT];
+    // as S falls below h1), with their deltas, kept in order.
     let mut n = 0;
-    for (j, &r) in roots.iter().enumerate() {
+    for j in 0..part.len() {
+        let (r, _) = part[j];
         if r - sl - h1 < sl {
-            part[n] = (r, j);
+            part[n] = part[j];
             n += 1;
         }
     }
@@ -371,7 +438,6 @@ fn root<const D: usize>(d2: &[f32], delta: &[[f32; D]], sl: f64) -> (f64, [f64; 
     // gradient: the last step is below 10^−12 s.
     let (mut lo, mut hi) = (h1 - sl, h1);
     let mut value = h1;
-    let mut weights = [0f64; KEPT];
     for _ in 0..64 {
         let (mut g, mut slope) = (-1.0, 0.0);
         for (w, &(r, _)) in weights.iter_mut().zip(part) {
@@ -422,7 +488,7 @@ impl<const D: usize> Simd<D, 1> {
             #[allow(unsafe_code)]
             return unsafe { self.near_points_avx2(at, reach, near) };
         }
-        self.near_points::<Eight>(at, reach, near)
+        self.near_points::<Eight, _>(at, reach, near)
     }
 
     /// [`Simd::near_points`] compiled with AVX2 enabled (see
@@ -430,7 +496,7 @@ impl<const D: usize> Simd<D, 1> {
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[target_feature(enable = "avx2")]
     fn near_points_avx2(&self, at: &Located<Eight, D>, reach: f32x8, near: &mut Near<D>) -> u32 {
-        self.near_points::<Eight>(at, reach, near)
+        self.near_points::<Eight, _>(at, reach, near)
     }
 
     /// Every point nearer than `reach` (squared, lane units; negative for
@@ -438,14 +504,14 @@ impl<const D: usize> Simd<D, 1> {
     /// whose reach passed [`MAX_SHELLS`] (never seen for valid input: their
     /// result is NaN).
     #[inline(always)]
-    fn near_points<L: Lanes>(&self, at: &Located<L, D>, reach: L::F, near: &mut Near<D>) -> u32 {
+    fn near_points<L: Lanes, C: Collect<D>>(&self, at: &Located<L, D>, reach: L::F, near: &mut C) -> u32 {
         let mut open = L::le(L::f(0.0), reach);
         let frame = Frame::<L, D>::new(at);
         for offset in &self.block {
             let c = frame.cell(offset);
             let needs = L::and(open, L::le(c.rank, reach));
             if L::any(needs) {
-                self.near_cell::<L>(&c, needs, reach, near);
+                self.near_cell::<L, C>(&c, needs, reach, near);
             }
         }
         if self.config.mode == Mode::Window {
@@ -462,7 +528,7 @@ impl<const D: usize> Simd<D, 1> {
                 let c = Frame::<L, D>::far_cell(at, &cell, &offset);
                 let needs = L::and(open, L::le(c.rank, reach));
                 if L::any(needs) {
-                    self.near_cell::<L>(&c, needs, reach, near);
+                    self.near_cell::<L, C>(&c, needs, reach, near);
                 }
             }
         }
@@ -471,7 +537,7 @@ impl<const D: usize> Simd<D, 1> {
 
     /// The points of cell `c` nearer than `reach`, in the lanes of `needs`.
     #[inline(always)]
-    fn near_cell<L: Lanes>(&self, c: &CellAt<L, D>, needs: L::M, reach: L::F, near: &mut Near<D>) {
+    fn near_cell<L: Lanes, C: Collect<D>>(&self, c: &CellAt<L, D>, needs: L::M, reach: L::F, near: &mut C) {
         self.cell_points::<L>(c, needs, |active, q, _| {
             let mut delta = [L::f(0.0); D];
             let mut d2 = L::f(0.0);
