@@ -9,7 +9,7 @@
 //! otherwise it starts again with R + 1.
 
 use worley::config::Metric;
-use worley::definition::Pattern;
+use worley::definition::{Pattern, FRACTION_ULP};
 use worley::reference::{Features, MAX_SHELLS};
 
 /// One candidate: rank, delta in cell units, ID.
@@ -78,4 +78,34 @@ pub fn brute_force_in_cell<const D: usize>(
         }
     }
     Features::invalid(order)
+}
+
+/// The periodic point set written out for brute force over its images:
+/// every feature point of the cells of one period (`period` cells per
+/// axis), repeated at shifts of −2..=2 periods per axis, as (position in
+/// cells, ID). Enough for periods of 3 cells or more and searches within
+/// 2 cells of the sample.
+pub fn periodic_images<const D: usize>(pattern: &Pattern<D>, period: [u32; D]) -> Vec<([f64; D], u32)> {
+    let mut images = Vec::new();
+    let cells: usize = period.iter().map(|&p| p as usize).product();
+    for index in 0..cells {
+        let mut rest = index;
+        let cell: [i64; D] = std::array::from_fn(|a| {
+            let c = rest % period[a] as usize;
+            rest /= period[a] as usize;
+            c as i64
+        });
+        for point in pattern.points(cell) {
+            for shift in 0..5usize.pow(D as u32) {
+                let mut rest = shift;
+                let at: [f64; D] = std::array::from_fn(|a| {
+                    let k = (rest % 5) as f64 - 2.0;
+                    rest /= 5;
+                    cell[a] as f64 + k * f64::from(period[a]) + f64::from(point.fraction[a]) * FRACTION_ULP
+                });
+                images.push((at, point.id));
+            }
+        }
+    }
+    images
 }

@@ -4,8 +4,9 @@
 //! its images, the same bits through every entry point, and bad lanes kept
 //! to themselves.
 
-use super::images::{d2, nearest, periodic_images};
+use super::images::{d2, nearest};
 use worley::{Config, ConfigError, Grid, Metric, Mode, NSphere32, Period, Reference, SimdNSphere, INVALID_ID};
+use worley_harness::oracle::periodic_images;
 use worley_harness::{chunked, sample_point, uniform};
 
 /// The stated bound: the radius is F2 halved at an exact centre, and F2
@@ -141,7 +142,7 @@ fn simd_n_sphere_keeps_bad_lanes_to_themselves_and_refuses_other_metrics() {
 /// nearest other image to it. Returns (radius in cells, centre ID,
 /// neighbour ID).
 fn periodic_n_sphere<const D: usize>(config: Config, period: [u32; D], x: [f64; D]) -> (f64, u32, u32) {
-    let images = periodic_images(config, period);
+    let images = periodic_images(Reference::<D>::new(config).unwrap().pattern(), period);
     let r: [f64; D] = std::array::from_fn(|a| x[a].rem_euclid(f64::from(period[a])));
     let c = nearest(&images, &r, None);
     let n = nearest(&images, &images[c].0, Some(c));

@@ -3,48 +3,27 @@
 //! sums against their definitions, analytic gradients against finite
 //! differences, and rejected parameters.
 
-use worley::definition::FRACTION_ULP;
 use worley::texture::{bump, Combination, Fractal, Texture, TextureError};
 use worley::{Config, Grid, Metric, Outputs, Period, Simd};
+use worley_harness::oracle;
 use worley_harness::{uniform, Tier};
 
-/// Brute force over the periodic point set: every point of every cell of
-/// one period, repeated at shifts −2..=2 periods per axis (enough for the
-/// periods used here: at least 3 cells, and F4 is within 2 cells). Sorted
-/// (distance in user units, id) pairs of the sample `x` given in cells.
+/// Brute force over the periodic point set ([`oracle::periodic_images`]: enough
+/// for the periods used here, at least 3 cells, and F4 is within 2 cells).
+/// Sorted (distance in user units, id) pairs of the sample `x` given in
+/// cells.
 fn periodic_brute_force<const D: usize>(
     kernel: &Simd<D, 4>,
     period: [u32; D],
     x: [f64; D],
     metric: Metric,
 ) -> Vec<(f64, u32)> {
-    let pattern = kernel.pattern();
-    let s = pattern.scale();
+    let s = kernel.pattern().scale();
     let r: [f64; D] = std::array::from_fn(|a| x[a].rem_euclid(period[a] as f64));
-    let mut found = Vec::new();
-    let cells: usize = period.iter().map(|&p| p as usize).product();
-    for index in 0..cells {
-        let mut rest = index;
-        let cell: [i64; D] = std::array::from_fn(|a| {
-            let c = rest % period[a] as usize;
-            rest /= period[a] as usize;
-            c as i64
-        });
-        for point in pattern.points(cell) {
-            for shift in 0..5usize.pow(D as u32) {
-                let mut rest = shift;
-                let delta: Vec<f64> = (0..D)
-                    .map(|a| {
-                        let k = (rest % 5) as f64 - 2.0;
-                        rest /= 5;
-                        let at = cell[a] as f64 + k * period[a] as f64 + point.fraction[a] as f64 * FRACTION_ULP;
-                        (r[a] - at) / s
-                    })
-                    .collect();
-                found.push((metric.distance(&delta), point.id));
-            }
-        }
-    }
+    let mut found: Vec<(f64, u32)> = oracle::periodic_images(kernel.pattern(), period)
+        .into_iter()
+        .map(|(at, id)| (metric.distance(&(0..D).map(|a| (r[a] - at[a]) / s).collect::<Vec<_>>()), id))
+        .collect();
     found.sort_by(|a, b| a.0.total_cmp(&b.0));
     found.truncate(5);
     found

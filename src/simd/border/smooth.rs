@@ -553,17 +553,7 @@ impl<const D: usize> Simd<D, 1> {
             let cell = frame.cell(offset);
             for p in &self.points[..count] {
                 let active = L::and(needs[index], L::lt(self.key::<L>(p), top[index]));
-                let q = Self::coordinates_of::<L>(p, h[index]);
-                let mut delta = [L::f(0.0); D];
-                let mut d2 = L::f(0.0);
-                for (a, v) in delta.iter_mut().enumerate() {
-                    *v = L::sub(cell.shifted[a], L::u24_to_f(q[a]));
-                    d2 = L::add(d2, L::mul(*v, *v));
-                }
-                let inside = L::bits(L::and(active, L::lt(d2, reach)));
-                if inside != 0 {
-                    near.push::<L>(inside, d2, &delta);
-                }
+                near_point::<L, D, C>(&cell.shifted, Self::coordinates_of::<L>(p, h[index]), active, reach, near);
             }
         }
         for offset in &self.block[self.near..] {
@@ -597,18 +587,31 @@ impl<const D: usize> Simd<D, 1> {
     /// The points of cell `c` nearer than `reach`, in the lanes of `needs`.
     #[inline(always)]
     fn near_cell<L: Lanes, C: Collect<D>>(&self, c: &CellAt<L, D>, needs: L::M, reach: L::F, near: &mut C) {
-        self.cell_points::<L>(c, needs, |active, q, _| {
-            let mut delta = [L::f(0.0); D];
-            let mut d2 = L::f(0.0);
-            for (a, v) in delta.iter_mut().enumerate() {
-                *v = L::sub(c.shifted[a], L::u24_to_f(q[a]));
-                d2 = L::add(d2, L::mul(*v, *v));
-            }
-            let inside = L::bits(L::and(active, L::lt(d2, reach)));
-            if inside != 0 {
-                near.push::<L>(inside, d2, &delta);
-            }
-        });
+        self.cell_points::<L>(c, needs, |active, q, _| near_point::<L, D, C>(&c.shifted, q, active, reach, near));
+    }
+}
+
+/// One point (`q`, its 24-bit coordinates in a cell whose corner the
+/// sample lies `shifted` from) into `near` in the lanes of `active` that
+/// it lies within `reach` of: its delta and squared distance as the
+/// kernel computes them.
+#[inline(always)]
+fn near_point<L: Lanes, const D: usize, C: Collect<D>>(
+    shifted: &[L::F; D],
+    q: [L::U; D],
+    active: L::M,
+    reach: L::F,
+    near: &mut C,
+) {
+    let mut delta = [L::f(0.0); D];
+    let mut d2 = L::f(0.0);
+    for (a, v) in delta.iter_mut().enumerate() {
+        *v = L::sub(shifted[a], L::u24_to_f(q[a]));
+        d2 = L::add(d2, L::mul(*v, *v));
+    }
+    let inside = L::bits(L::and(active, L::lt(d2, reach)));
+    if inside != 0 {
+        near.push::<L>(inside, d2, &delta);
     }
 }
 
