@@ -91,6 +91,13 @@ pub(crate) struct GridRows<'g, const D: usize> {
     axes: Option<Axes<D>>,
 }
 
+impl<const D: usize> GridRows<'_, D> {
+    /// The grid.
+    pub(crate) fn grid(&self) -> &Grid<D> {
+        self.grid
+    }
+}
+
 impl<const D: usize, const N: usize> Simd<D, N> {
     /// Whether [`Simd::evaluate_grid`] takes the coherent path for `grid`:
     /// [`Mode::Exact`], eight steps along axis 0 within one cell

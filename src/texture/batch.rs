@@ -188,8 +188,9 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         // Rows `first..` of every octave, combined and summed into `dst`,
         // in the order and with the operations of `filtered8`.
         let band = |first: usize, dst: &mut [f32]| {
-            let mut distances = vec![[0f32; N]; if self.border.is_some() { 0 } else { dst.len() }];
-            let mut borders = None;
+            let own = self.border.is_some() || self.smooth.is_some();
+            let mut distances = vec![[0f32; N]; if own { 0 } else { dst.len() }];
+            let (mut borders, mut smooths) = (None, None);
             for (i, (octave, &(_, amplitude, _))) in rows.iter().zip(&self.octaves).enumerate() {
                 let a = alpha[i];
                 let Some(octave) = octave else {
@@ -210,6 +211,15 @@ impl<const D: usize, const N: usize> Texture<D, N> {
                     border.grid_rows_into(octave, first, borders);
                     for (s, b) in dst.chunks_mut(8).zip(borders.chunks(8)) {
                         sum(s, &std::array::from_fn::<f32, 8, _>(|j| b[j.min(b.len() - 1)].distance));
+                    }
+                    continue;
+                }
+                if let Some((smooth, s)) = &self.smooth {
+                    // Smooth F1 from the grid tiles' F1.
+                    let smooths = smooths.get_or_insert_with(|| vec![crate::Smooth32::INVALID; dst.len()]);
+                    smooth.grid_rows_into(octave, first, *s, smooths);
+                    for (d, v) in dst.chunks_mut(8).zip(smooths.chunks(8)) {
+                        sum(d, &std::array::from_fn::<f32, 8, _>(|j| v[j.min(v.len() - 1)].value));
                     }
                     continue;
                 }
@@ -247,10 +257,8 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         // The largest magnitude any point's coordinate or partial sum takes.
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
         let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
-        // Smooth F1 and the n-sphere radius have no grid tiles: eight
-        // points at a time.
+        // The n-sphere radius has no grid tiles: eight points at a time.
         let suits = finite
-            && self.smooth.is_none()
             && self.n_sphere.is_none()
             && self.period.is_none()
             && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300)

@@ -88,14 +88,24 @@ fn simd_smooth_agrees_with_the_reference_in_every_dimension() {
 fn simd_smooth_gives_the_same_bits_through_every_entry_point() {
     fn check<const D: usize>(config: Config, s: f32) {
         let simd = SimdSmooth::<D>::new(config).unwrap();
-        let grid =
-            Grid { origin: [-3.3; D], step: [0.37; D], size: std::array::from_fn(|a| if a < 2 { 13 } else { 3 }) };
+        let bits = |v: &Smooth32<D>| (v.value.to_bits(), v.gradient.map(f32::to_bits), v.feature);
+        // A grid whose F1 takes the grid tiles (eight steps within a cell)
+        // where the mode allows them, and one whose F1 is per sample.
+        let size = std::array::from_fn(|a| if a < 2 { 13 } else { 3 });
+        let fine = Grid { origin: [-3.3; D], step: [0.05; D], size };
+        let kernel = Simd::<D, 1>::new(config, Outputs::Distances).unwrap();
+        assert_eq!(kernel.coherent_grid(&fine), config.mode == Mode::Exact, "{D}D");
+        for (step, name) in [(0.05, "tiles"), (0.37, "per sample")] {
+            let grid = Grid { step: [step; D], ..fine };
+            let mut out = vec![Smooth32::INVALID; grid.len().unwrap()];
+            simd.smooth_grid(&grid, s, &mut out).unwrap();
+            for (i, g) in out.iter().enumerate() {
+                assert_eq!(bits(g), bits(&simd.smooth(grid.point(i), s)), "{D}D grid ({name}) sample {i}");
+            }
+        }
+        let grid = Grid { step: [0.37; D], ..fine };
         let mut out = vec![Smooth32::INVALID; grid.len().unwrap()];
         simd.smooth_grid(&grid, s, &mut out).unwrap();
-        let bits = |v: &Smooth32<D>| (v.value.to_bits(), v.gradient.map(f32::to_bits), v.feature);
-        for (i, g) in out.iter().enumerate() {
-            assert_eq!(bits(g), bits(&simd.smooth(grid.point(i), s)), "{D}D grid sample {i}");
-        }
         for (c, chunk) in out.chunks(8).enumerate().take(20) {
             if chunk.len() < 8 {
                 break;

@@ -8,7 +8,8 @@
 //! (less than F1 + 2s) take part.
 //!
 //! ## How
-//! 1. **F1** with its delta and ID, from the kernel's own search.
+//! 1. **F1** with its delta and ID, from the kernel's own search (on a
+//!    grid, through the grid tiles, which give the same bits).
 //! 2. **Every point within the reach**, per lane: the 2^d block as the
 //!    kernel's first stage visits it (its cells hashed up front, the same
 //!    number of point steps in each cell some lane reaches: 6 % faster
@@ -54,12 +55,13 @@ use wide::{f32x8, u32x8};
 
 use super::super::batch::in_cell;
 use super::super::best::Best;
+use super::super::coherent::GridRows;
 use super::super::generate::UNIT;
 use super::super::lanes::{Eight, Lanes, One, WIDEST};
 use super::super::locate::Located;
 use super::super::periodic::wrap;
 use super::super::search::outside;
-use super::super::{by_eights, Grid, Outputs, Period, Point, Simd, SizeError};
+use super::super::{by_eights, Features32, Grid, Outputs, Period, Point, Simd, SizeError, SERIAL_BAND};
 use super::search::{CellAt, Frame};
 use super::SLACK;
 use crate::config::{Config, ConfigError, Metric, Mode};
@@ -153,6 +155,37 @@ pub struct SimdSmooth<const D: usize> {
 trait Collect<const D: usize> {
     /// One point, in the lanes of the bit mask `inside`.
     fn push<L: Lanes>(&mut self, inside: u32, d2: L::F, delta: &[L::F; D]);
+}
+
+/// The lanes' F1 as the kernel gives it (user units): distance, ID and
+/// delta; a grid's tiles give the same bits.
+struct First<const D: usize> {
+    f1: [f32; WIDEST],
+    id: [u32; WIDEST],
+    delta: [[f32; WIDEST]; D],
+}
+
+impl<const D: usize> First<D> {
+    /// From the kernel's finished results.
+    #[inline(always)]
+    fn of<L: Lanes>(best: &Best<L, D, 1>) -> Self {
+        let mut first = First { f1: [0.0; WIDEST], id: [INVALID_ID; WIDEST], delta: [[0.0; WIDEST]; D] };
+        L::f_store(best.rank[0], &mut first.f1[..L::N]);
+        L::u_store(best.id[0], &mut first.id[..L::N]);
+        for (out, v) in first.delta.iter_mut().zip(&best.delta[0]) {
+            L::f_store(*v, &mut out[..L::N]);
+        }
+        first
+    }
+
+    /// From eight results.
+    fn from_results(results: &[Features32<D, 1>; 8]) -> Self {
+        First {
+            f1: std::array::from_fn(|i| if i < 8 { results[i].distance[0] } else { 0.0 }),
+            id: std::array::from_fn(|i| if i < 8 { results[i].id[0] } else { INVALID_ID }),
+            delta: std::array::from_fn(|a| std::array::from_fn(|i| if i < 8 { results[i].delta[0][a] } else { 0.0 })),
+        }
+    }
 }
 
 /// The points within reach, per lane in the order met: squared distance
@@ -299,34 +332,60 @@ impl<const D: usize> SimdSmooth<D> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        grid.eights_into(0, out, |block| self.smooth8(block, s).lanes());
+        let rows = self.first.grid_rows(grid);
+        for (b, dst) in out.chunks_mut(SERIAL_BAND * grid.size[0].max(1)).enumerate() {
+            self.grid_rows_into(&rows, b * SERIAL_BAND, s, dst);
+        }
         Ok(())
+    }
+
+    /// Rows `first..` of a grid (whole rows; `rows` from a kernel of this
+    /// configuration) into `out`: the bits [`SimdSmooth::smooth_grid`]
+    /// writes for them. F1 with its ID and delta through the grid tiles,
+    /// which give each point the per-sample kernel's bits; then the search
+    /// within reach and the root eight points at a time.
+    pub(crate) fn grid_rows_into(&self, rows: &GridRows<'_, D>, first: usize, s: f32, out: &mut [Smooth32<D>]) {
+        if out.is_empty() {
+            return;
+        }
+        let mut f1 = vec![Features32::<D, 1>::default(); out.len()];
+        self.first.grid_rows_into(rows, first, &mut f1);
+        let grid = rows.grid();
+        let start = first * grid.size[0];
+        for (c, dst) in out.chunks_mut(8).enumerate() {
+            let index = |i: usize| c * 8 + i.min(dst.len() - 1);
+            let block: [[f64; D]; 8] = std::array::from_fn(|i| grid.point(start + index(i)));
+            let results: [Features32<D, 1>; 8] = std::array::from_fn(|i| f1[index(i)]);
+            let at = self.first.locate::<Eight>(&block);
+            let search = |reach, near: &mut Near<D>| self.first.near_points8(&at, reach, near);
+            let lanes = self.lanes::<Eight>(&at, &First::from_results(&results), s, search);
+            dst.copy_from_slice(&lanes[..dst.len()]);
+        }
     }
 
     /// One located sample.
     fn one(&self, at: &Located<One, D>, s: f32) -> Smooth32<D> {
-        let (best, _, raw) = self.first.dispatch_one(at);
+        let (best, _, _) = self.first.dispatch_one(at);
         let search = |reach, near: &mut Near<D>| self.first.near_points::<One, _>(at, reach, near);
-        self.lanes::<One>(at, &best, &raw, s, search)[0]
+        self.lanes::<One>(at, &First::of::<One>(&best), s, search)[0]
     }
 
     /// Eight located samples.
     fn eight(&self, at: &Located<Eight, D>, s: f32) -> Smooth8<D> {
-        let (best, _, raw) = self.first.dispatch8_whole(at);
+        let (best, _, _) = self.first.dispatch8_whole(at);
         let search = |reach, near: &mut Near<D>| self.first.near_points8(at, reach, near);
-        let lanes = self.lanes::<Eight>(at, &best, &raw, s, search);
+        let lanes = self.lanes::<Eight>(at, &First::of::<Eight>(&best), s, search);
         Smooth8::from_lanes(&std::array::from_fn(|i| lanes[i]))
     }
 
-    /// The located lanes' values from the kernel's F1 (`best` finished in
-    /// user units, `raw` in lane units), `search` finding the points within
-    /// a reach ([`Simd::near_points`]).
+    /// The located lanes' values from their F1 (`first`, as the kernel
+    /// gives it), `search` finding the points within a reach
+    /// ([`Simd::near_points`]).
     #[inline(always)]
     fn lanes<L: Lanes>(
         &self,
         at: &Located<L, D>,
-        best: &Best<L, D, 1>,
-        raw: &Best<L, D, 1>,
+        first: &First<D>,
         s: f32,
         search: impl FnOnce(L::F, &mut Near<D>) -> u32,
     ) -> [Smooth32<D>; WIDEST] {
@@ -334,14 +393,7 @@ impl<const D: usize> SimdSmooth<D> {
         if !(s >= 0.0 && s.is_finite()) {
             return out;
         }
-        let (mut f1, mut id, mut rank) = ([0f32; WIDEST], [INVALID_ID; WIDEST], [0f32; WIDEST]);
-        L::f_store(best.rank[0], &mut f1[..L::N]);
-        L::u_store(best.id[0], &mut id[..L::N]);
-        L::f_store(raw.rank[0], &mut rank[..L::N]);
-        let mut delta = [[0f32; WIDEST]; D];
-        for (out, v) in delta.iter_mut().zip(&best.delta[0]) {
-            L::f_store(*v, &mut out[..L::N]);
-        }
+        let First { f1, id, delta } = first;
         let mut open = [false; WIDEST];
         for i in 0..L::N {
             if f1[i].is_nan() {
@@ -366,7 +418,8 @@ impl<const D: usize> SimdSmooth<D> {
         // point beyond the exact reach has weight 0, so more is harmless.
         let mut reach = [-1f32; WIDEST];
         for i in (0..L::N).filter(|&i| open[i]) {
-            let h1 = (f64::from(rank[i]) + sl * sl).sqrt() - sl;
+            let f = f64::from(f1[i]) * unit;
+            let h1 = (f * f + sl * sl).sqrt() - sl;
             reach[i] = (((h1 + 2.0 * sl).powi(2) - sl * sl) * f64::from(SLACK * SLACK)) as f32;
         }
         let mut near = Near::new();
