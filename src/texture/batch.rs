@@ -188,9 +188,9 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         // Rows `first..` of every octave, combined and summed into `dst`,
         // in the order and with the operations of `filtered8`.
         let band = |first: usize, dst: &mut [f32]| {
-            let own = self.border.is_some() || self.smooth.is_some();
+            let own = self.border.is_some() || self.smooth.is_some() || self.n_sphere.is_some();
             let mut distances = vec![[0f32; N]; if own { 0 } else { dst.len() }];
-            let (mut borders, mut smooths) = (None, None);
+            let (mut borders, mut smooths, mut spheres) = (None, None, None);
             for (i, (octave, &(_, amplitude, _))) in rows.iter().zip(&self.octaves).enumerate() {
                 let a = alpha[i];
                 let Some(octave) = octave else {
@@ -220,6 +220,16 @@ impl<const D: usize, const N: usize> Texture<D, N> {
                     smooth.grid_rows_into(octave, first, *s, smooths);
                     for (d, v) in dst.chunks_mut(8).zip(smooths.chunks(8)) {
                         sum(d, &std::array::from_fn::<f32, 8, _>(|j| v[j.min(v.len() - 1)].value));
+                    }
+                    continue;
+                }
+                if let Some(n_sphere) = &self.n_sphere {
+                    // The radius from the grid tiles' F1, shared by the
+                    // samples of one centre.
+                    let spheres = spheres.get_or_insert_with(|| vec![crate::NSphere32::INVALID; dst.len()]);
+                    n_sphere.grid_rows_into(octave, first, spheres);
+                    for (d, v) in dst.chunks_mut(8).zip(spheres.chunks(8)) {
+                        sum(d, &std::array::from_fn::<f32, 8, _>(|j| v[j.min(v.len() - 1)].radius));
                     }
                     continue;
                 }
@@ -257,9 +267,7 @@ impl<const D: usize, const N: usize> Texture<D, N> {
         // The largest magnitude any point's coordinate or partial sum takes.
         let extent = (0..D).fold(0f64, |m, a| m.max(grid.origin[a].abs() + grid.step[a].abs() * grid.size[a] as f64));
         let finite = grid.origin.iter().chain(&grid.step).all(|v| v.is_finite());
-        // The n-sphere radius has no grid tiles: eight points at a time.
         let suits = finite
-            && self.n_sphere.is_none()
             && self.period.is_none()
             && self.octaves.iter().all(|&(f, _, _)| power_of_two(f) && extent * f < 1e300)
             && alpha.iter().zip(&self.octaves).all(|(&a, &(f, _, _))| {

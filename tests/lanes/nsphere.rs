@@ -76,15 +76,24 @@ fn simd_n_sphere_agrees_with_the_reference_in_every_dimension() {
 fn simd_n_sphere_gives_the_same_bits_through_every_entry_point() {
     fn check<const D: usize>(config: Config) {
         let simd = SimdNSphere::<D>::new(config).unwrap();
-        let grid =
-            Grid { origin: [-3.3; D], step: [0.37; D], size: std::array::from_fn(|a| if a < 2 { 13 } else { 3 }) };
+        let bits = |n: &NSphere32| (n.radius.to_bits(), n.feature, n.neighbour);
+        // A grid whose F1 takes the grid tiles and whose samples share
+        // their centres many times over, and one whose F1 is per sample.
+        let size = std::array::from_fn(|a| if a < 2 { 40 } else { 3 });
+        let fine = Grid { origin: [-3.3; D], step: [0.05; D], size };
+        let kernel = worley::Simd::<D, 1>::new(config, worley::Outputs::Distances).unwrap();
+        assert_eq!(kernel.coherent_grid(&fine), config.mode == Mode::Exact, "{D}D");
+        for (step, name) in [(0.05, "tiles"), (0.37, "per sample")] {
+            let grid = Grid { step: [step; D], ..fine };
+            let mut out = vec![NSphere32::INVALID; grid.len().unwrap()];
+            simd.n_sphere_grid(&grid, &mut out).unwrap();
+            for (i, g) in out.iter().enumerate() {
+                assert_eq!(bits(g), bits(&simd.n_sphere(grid.point(i))), "{D}D grid ({name}) sample {i}");
+            }
+        }
+        let grid = Grid { step: [0.37; D], ..fine };
         let mut out = vec![NSphere32::INVALID; grid.len().unwrap()];
         simd.n_sphere_grid(&grid, &mut out).unwrap();
-        let bits = |n: &NSphere32| (n.radius.to_bits(), n.feature, n.neighbour);
-        for (i, g) in out.iter().enumerate() {
-            let x = grid.point(i);
-            assert_eq!(bits(g), bits(&simd.n_sphere(x)), "{D}D grid sample {i}");
-        }
         for (c, chunk) in out.chunks(8).enumerate().take(20) {
             if chunk.len() < 8 {
                 break;

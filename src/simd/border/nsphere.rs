@@ -28,15 +28,18 @@
 //! [`Mode::Window`](crate::Mode::Window) a centre whose 3^d block holds no
 //! other point gives +∞ and [`INVALID_ID`] for the neighbour.
 
+use std::collections::HashMap;
+
 use wide::{f32x8, u32x8};
 
 use super::super::batch::in_cell;
 use super::super::best::Best;
+use super::super::coherent::GridRows;
 use super::super::generate::UNIT;
 use super::super::lanes::{Eight, Lanes, One, WIDEST};
 use super::super::locate::Located;
 use super::super::periodic::wrap;
-use super::super::{by_eights, Grid, Outputs, Period, Point, Simd, SizeError};
+use super::super::{by_eights, Features32, Grid, Outputs, Period, Point, Simd, SizeError, SERIAL_BAND};
 use super::search::Frame;
 use crate::config::{Config, ConfigError, Metric};
 use crate::definition::{FRACTION_BITS, INVALID_ID};
@@ -213,8 +216,72 @@ impl<const D: usize> SimdNSphere<D> {
         if out.len() != needed {
             return Err(SizeError { needed, given: out.len() });
         }
-        grid.eights_into(0, out, |block| self.n_sphere8(block).lanes());
+        let rows = self.first.grid_rows(grid);
+        for (b, dst) in out.chunks_mut(SERIAL_BAND * grid.size[0].max(1)).enumerate() {
+            self.grid_rows_into(&rows, b * SERIAL_BAND, dst);
+        }
         Ok(())
+    }
+
+    /// Rows `first..` of a grid (whole rows; `rows` from a kernel of this
+    /// configuration) into `out`: the bits [`SimdNSphere::n_sphere_grid`]
+    /// writes for them. The radius depends on F1's point alone, and a
+    /// grid's neighbouring samples mostly share it: F1 with its ID and
+    /// delta comes from the grid tiles (the per-sample kernel's bits), the
+    /// samples whose F1 has the same ID and, within 10^−4 user units, the
+    /// same position x − δ share one sample's result, and only that sample
+    /// runs the per-sample path (F1, its point, F2 there). Two different
+    /// points would have to share a 32-bit ID within 10^−4 of each other to
+    /// be taken for one.
+    pub(crate) fn grid_rows_into(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [NSphere32]) {
+        if out.is_empty() {
+            return;
+        }
+        let grid = rows.grid();
+        let start = first * grid.size[0];
+        let mut f1 = vec![Features32::<D, 1>::default(); out.len()];
+        self.first.grid_rows_into(rows, first, &mut f1);
+        let centre = |i: usize| -> [f64; D] {
+            let x = grid.point(start + i);
+            std::array::from_fn(|a| x[a] - f64::from(f1[i].delta[0][a]))
+        };
+        let same = |p: &[f64; D], q: &[f64; D]| (0..D).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>() <= 1e-8;
+        // Per sample, the index in `standing` of the sample whose result it
+        // takes; `standing` lists the samples evaluated.
+        let mut takes = vec![0usize; out.len()];
+        let mut standing: Vec<(usize, [f64; D])> = Vec::new();
+        let mut by_id: HashMap<u32, usize> = HashMap::new();
+        for i in 0..out.len() {
+            let (id, f) = (f1[i].id[0], f1[i].distance[0]);
+            if !f.is_finite() {
+                // Bad input or an empty window: its own evaluation.
+                takes[i] = standing.len();
+                standing.push((i, [f64::NAN; D]));
+                continue;
+            }
+            let p = centre(i);
+            // The previous sample's centre first: the common case.
+            if i > 0 && f1[i - 1].id[0] == id && same(&standing[takes[i - 1]].1, &p) {
+                takes[i] = takes[i - 1];
+                continue;
+            }
+            match by_id.get(&id) {
+                Some(&k) if same(&standing[k].1, &p) => takes[i] = k,
+                _ => {
+                    by_id.insert(id, standing.len());
+                    takes[i] = standing.len();
+                    standing.push((i, p));
+                }
+            }
+        }
+        let mut results = vec![NSphere32::INVALID; standing.len()];
+        for (chunk, dst) in standing.chunks(8).zip(results.chunks_mut(8)) {
+            let block: [[f64; D]; 8] = std::array::from_fn(|k| grid.point(start + chunk[k.min(chunk.len() - 1)].0));
+            dst.copy_from_slice(&self.n_sphere8(&block).lanes()[..dst.len()]);
+        }
+        for (o, &k) in out.iter_mut().zip(&takes) {
+            *o = results[k];
+        }
     }
 
     /// One located sample (`period` the pattern's, if it has one).
