@@ -18,6 +18,11 @@
 //!    the smaller ID, the kernel puts it first: it is then the neighbour,
 //!    at distance 0, as in the reference.
 //!
+//! On a grid ([`SimdNSphere::n_sphere_grid`]) F1 comes from the grid
+//! tiles, and the samples whose F1 is the same point share the result of
+//! the first of them to run the steps above: the radius depends on F1's
+//! point alone.
+//!
 //! The radius is F2's distance halved (exact in f32), so its error is F2's
 //! at an exact position: at most 2ε(2r + 1/S) against the f64 reference,
 //! with ε = 2^−23 and S the pattern's scale (`tests/lanes/border.rs`).
@@ -251,6 +256,7 @@ impl<const D: usize> SimdNSphere<D> {
         let mut takes = vec![0usize; out.len()];
         let mut standing: Vec<(usize, [f64; D])> = Vec::new();
         let mut by_id: HashMap<u32, usize> = HashMap::new();
+        let width = grid.size[0];
         for i in 0..out.len() {
             let (id, f) = (f1[i].id[0], f1[i].distance[0]);
             if !f.is_finite() {
@@ -259,12 +265,28 @@ impl<const D: usize> SimdNSphere<D> {
                 standing.push((i, [f64::NAN; D]));
                 continue;
             }
-            let p = centre(i);
-            // The previous sample's centre first: the common case.
-            if i > 0 && f1[i - 1].id[0] == id && same(&standing[takes[i - 1]].1, &p) {
+            // The common cases first: the previous sample of the row (one
+            // step along axis 0 away) or the sample of the previous row (one
+            // step along axis 1) has the same ID, and its delta differs by
+            // that step.
+            let neighbour = |j: usize, axis: usize| {
+                let (d, e) = (&f1[i].delta[0], &f1[j].delta[0]);
+                let moved = |a: usize| f64::from(d[a]) - f64::from(e[a]) - if a == axis { grid.step[a] } else { 0.0 };
+                f1[j].id[0] == id
+                    && f1[j].distance[0].is_finite()
+                    && (0..D).map(|a| moved(a).powi(2)).sum::<f64>() <= 1e-8
+            };
+            if !i.is_multiple_of(width) && neighbour(i - 1, 0) {
                 takes[i] = takes[i - 1];
                 continue;
             }
+            // (Rows count over axis 1 first: the previous row lies one step
+            // along axis 1 unless this row starts a slice.)
+            if i >= width && !(first + i / width).is_multiple_of(grid.size[1]) && neighbour(i - width, 1) {
+                takes[i] = takes[i - width];
+                continue;
+            }
+            let p = centre(i);
             match by_id.get(&id) {
                 Some(&k) if same(&standing[k].1, &p) => takes[i] = k,
                 _ => {
