@@ -22,9 +22,9 @@
 //! 3. **The root**, per lane in f64: Halley's method from S = h_1, kept
 //!    inside the bracket (h_1 − s, h_1] by bisection, until Newton's step
 //!    is below 10^−7 s (the error after it then O(10^−21) s; 3.4
-//!    evaluations where Newton's method to 10^−12 s took 4.7); a lane with F1's point alone
-//!    within reach needs no step (S = h_1). The gradient is the weighted
-//!    mean of the ∇h_j.
+//!    evaluations where Newton's method to 10^−12 s took 4.7); a lane
+//!    with F1's point alone within reach needs no step (S = h_1). The
+//!    gradient is the weighted mean of the ∇h_j.
 //!
 //! A lane with more than [`KEPT`] points within reach (s well beyond the
 //! spacing of the points) searches again alone, keeping every point on
