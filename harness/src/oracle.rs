@@ -1,9 +1,9 @@
-//! The brute-force oracle: every feature point of a wide block, sorted.
+//! The brute-force oracle: every feature point of a wide block, ranked.
 //!
 //! It shares only the definition ([`Pattern::for_each_point`]) and the
 //! metric's rank with the evaluators. There is no pruning and no insertion
 //! list: it gathers every point of the block of Chebyshev radius R (starting
-//! at R = 2, a 5^d block), sorts them all by rank and then by ID (the
+//! at R = 2, a 5^d block), takes the n first by rank and then by ID (the
 //! crate's order for ties), and accepts the n-th only if it is strictly
 //! closer than the outside of that block, so no point outside can tie it;
 //! otherwise it starts again with R + 1.
@@ -59,7 +59,11 @@ pub fn brute_force_in_cell<const D: usize>(
         if scratch.len() < order {
             continue;
         }
-        scratch.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+        // The n nearest in the order rank, then ID: the n-th is put in its
+        // place with every point before it no later, then those are sorted.
+        let by_rank_then_id = |a: &Candidate<D>, b: &Candidate<D>| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2));
+        scratch.select_nth_unstable_by(order - 1, by_rank_then_id);
+        scratch[..order].sort_by(by_rank_then_id);
         // Distance from the sample to the outside of the block.
         let mut edge = f64::INFINITY;
         for &fa in &f {
