@@ -9,10 +9,12 @@
 //!    ([`Simd`] of order 1, IDs and deltas), so F1 is the kernel's, bit for
 //!    bit, and its exactness is the kernel's.
 //! 2. **F1's point as integers**: the point of F1's ID whose delta has F1's
-//!    bits is met again among the cells no farther than F1, and its
-//!    position relative to the sample's cell is kept as integers in lane
-//!    units (2^−24 cells): a cell's corner plus the point's 24-bit
-//!    coordinates, exact in i32.
+//!    bits is met again: first in the one cell where the sample minus F1's
+//!    delta falls, then, in the lanes where it was not there (a point beyond
+//!    the neighbouring cells, or one that rounding put across a face), among
+//!    the cells no farther than F1. Its position relative to the sample's
+//!    cell is kept as integers in lane units (2^−24 cells): a cell's corner
+//!    plus the point's 24-bit coordinates, exact in i32.
 //! 3. **The border search**: every lane visits its own cell, then the rest
 //!    of the 3^d block near side first (the kernel's mirrored frame), then
 //!    Chebyshev shells, each cell only for the lanes whose F1 + 2b reaches

@@ -135,8 +135,8 @@ impl<const D: usize> Simd<D, 1> {
         let mut p1 = [L::u(0); D];
         // 1 where the point is still to be found, as lanes of f32.
         let mut missing = L::select(open, L::f(1.0), L::f(0.0));
-        let mut look = |c: &CellAt<L, D>, missing: &mut L::F| {
-            let needs = L::and(L::lt(L::f(0.5), *missing), L::le(c.rank, limit));
+        let mut look = |c: &CellAt<L, D>, lanes: L::M, missing: &mut L::F| {
+            let needs = L::and(lanes, L::and(L::lt(L::f(0.5), *missing), L::le(c.rank, limit)));
             if !L::any(needs) {
                 return;
             }
@@ -151,18 +151,52 @@ impl<const D: usize> Simd<D, 1> {
                 *missing = L::select(same, L::f(0.0), *missing);
             });
         };
-        for offset in &self.block {
-            look(&frame.cell(offset), &mut missing);
+        let all = L::lt(L::f(0.0), L::f(1.0));
+        // First the one cell where the sample minus F1's delta falls, which
+        // nearly always holds the point: lanes it does not settle (a point
+        // beyond the neighbouring cells, or one that rounding put across a
+        // face) search every cell within F1 below, as if it had not been
+        // tried.
+        let (guess, near) = Self::guess_cell::<L>(at, &nearest.delta[0]);
+        look(&guess, near, &mut missing);
+        if L::any(L::lt(L::f(0.5), missing)) {
+            for offset in &self.block {
+                look(&frame.cell(offset), all, &mut missing);
+            }
         }
         for r in 2..=MAX_SHELLS {
             if !L::any(L::lt(L::f(0.5), missing)) {
                 break;
             }
             for offset in shell::<D>(r) {
-                look(&Frame::<L, D>::far_cell(at, cell, &offset), &mut missing);
+                look(&Frame::<L, D>::far_cell(at, cell, &offset), all, &mut missing);
             }
         }
         (p1, L::lt(missing, L::f(0.5)))
+    }
+
+    /// The cell of the 3^d block that holds the point at delta `delta` from
+    /// each lane's sample (lane units), as [`Frame::cell`] gives it (its
+    /// words, the sample minus its corner with the frame's bits, and the
+    /// corner), with the lanes where that point lies within the block; its
+    /// rank is 0, since the cell is tried whatever its distance.
+    #[inline(always)]
+    fn guess_cell<L: Lanes>(at: &Located<L, D>, delta: &[L::F; D]) -> (CellAt<L, D>, L::M) {
+        let one = L::f(UNIT);
+        let (up, down) = (L::u(1 << FRACTION_BITS), L::u((1u32 << FRACTION_BITS).wrapping_neg()));
+        let mut inside = L::lt(L::f(0.0), L::f(1.0));
+        let mut c = CellAt { rank: L::f(0.0), terms: [L::u(0); D], shifted: [L::f(0.0); D], corner: [L::u(0); D] };
+        for (a, &d) in delta.iter().enumerate() {
+            let f = at.f[a];
+            let at_point = L::sub(f, d);
+            let (below, above) = (L::lt(at_point, L::f(0.0)), L::le(one, at_point));
+            inside = L::and(inside, L::and(L::le(L::f(-UNIT), at_point), L::lt(at_point, L::f(2.0 * UNIT))));
+            let t = at.words[a];
+            c.terms[a] = L::select_u(below, t[0], L::select_u(above, t[2], t[1]));
+            c.shifted[a] = L::select(below, L::add(f, one), L::select(above, L::sub(f, one), f));
+            c.corner[a] = L::select_u(below, down, L::select_u(above, up, L::u(0)));
+        }
+        (c, inside)
     }
 
     /// The points of cell `c` against the running plane, in the lanes of
