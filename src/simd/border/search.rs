@@ -90,7 +90,7 @@ impl<const D: usize> Simd<D, 1> {
             let c = frame.cell(offset);
             let needs = L::and(open, L::le(c.rank, reach(&plane)));
             if L::any(needs) {
-                self.border_cell::<L>(&c, needs, nearest, &p1, &mut plane);
+                self.border_cell::<L>(&c, needs, reach(&plane), nearest, &p1, &mut plane);
             }
         }
         if self.config.mode == Mode::Window {
@@ -109,7 +109,7 @@ impl<const D: usize> Simd<D, 1> {
                 let c = Frame::<L, D>::far_cell(at, &cell, &offset);
                 let needs = L::and(open, L::le(c.rank, reach(&plane)));
                 if L::any(needs) {
-                    self.border_cell::<L>(&c, needs, nearest, &p1, &mut plane);
+                    self.border_cell::<L>(&c, needs, reach(&plane), nearest, &p1, &mut plane);
                 }
             }
         }
@@ -200,18 +200,32 @@ impl<const D: usize> Simd<D, 1> {
     }
 
     /// The points of cell `c` against the running plane, in the lanes of
-    /// `needs`; `p1` is F1's point (see [`Simd::find_nearest`]).
+    /// `needs` and within `reach` (squared, lane units², the lanes'
+    /// F1 + 2b with the slack); `p1` is F1's point (see
+    /// [`Simd::find_nearest`]).
     #[inline(always)]
     pub(super) fn border_cell<L: Lanes>(
         &self,
         c: &CellAt<L, D>,
         needs: L::M,
+        reach: L::F,
         nearest: &Best<L, D, 1>,
         p1: &[L::U; D],
         plane: &mut Plane<L, D>,
     ) {
         let d1 = nearest.delta[0];
         self.cell_points::<L>(c, needs, |active, q, id| {
+            let dj: [L::F; D] = per_axis(|a| L::sub(c.shifted[a], L::u24_to_f(q[a])));
+            let mut rank = L::mul(dj[0], dj[0]);
+            for d in &dj[1..] {
+                rank = L::add(rank, L::mul(*d, *d));
+            }
+            // Only points within the lane's F1 + 2b can hold the nearest
+            // plane (the reach test of the cells, point by point).
+            let active = L::and(active, L::le(rank, reach));
+            if !L::any(active) {
+                return;
+            }
             // u = p_j − p₁ exactly in integers, then rounded once;
             // b = u·(m − x) / |u| with m − x = −(δ₁ + δ_j) / 2, that is
             // b = k / (2|u|) with k = −u·(δ₁ + δ_j).
@@ -220,9 +234,8 @@ impl<const D: usize> Simd<D, 1> {
             let mut u = [L::f(0.0); D];
             for a in 0..D {
                 u[a] = L::i_to_f(L::u_sub(L::u_add(c.corner[a], q[a]), p1[a]));
-                let dj = L::sub(c.shifted[a], L::u24_to_f(q[a]));
                 uu = L::add(uu, L::mul(u[a], u[a]));
-                us = L::add(us, L::mul(u[a], L::add(d1[a], dj)));
+                us = L::add(us, L::mul(u[a], L::add(d1[a], dj[a])));
             }
             plane.offer_point(active, us, uu, u, id);
         });
