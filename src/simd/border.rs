@@ -19,13 +19,16 @@
 //!    of the 3^d block near side first (the kernel's mirrored frame), then
 //!    Chebyshev shells, each cell only for the lanes whose F1 + 2b reaches
 //!    it, until the outside of the block covered is beyond F1 + 2b in every
-//!    lane. For each point p_j, u = p_j − p₁ is the exact integer difference
-//!    rounded once to f32, and b_j = k_j / (2|u|) with k_j = −u·(δ₁ + δ_j)
-//!    and δ the sample minus the point: no difference of squared distances,
-//!    whose cancellation near the border would cost digits, and no normal
-//!    tilted by rounding when two points lie close together (where F2 − F1
-//!    draws its wedges). Planes are compared as k_j²·|u|² < k²·|u_j|² in
-//!    cells², all terms non-negative, so no point costs a square root or a
+//!    lane; a point's plane is computed only where some lane has the point
+//!    itself within F1 + 2b (no point beyond can hold the nearest plane:
+//!    at distance d_j, its b_j is at least (d_j − F1)/2 > b). For each
+//!    point p_j, u = p_j − p₁ is the exact integer difference rounded once
+//!    to f32, and b_j = k_j / (2|u|) with k_j = −u·(δ₁ + δ_j) and δ the
+//!    sample minus the point: no difference of squared distances, whose
+//!    cancellation near the border would cost digits, and no normal tilted
+//!    by rounding when two points lie close together (where F2 − F1 draws
+//!    its wedges). Planes are compared as k_j²·|u|² < k²·|u_j|² in cells²,
+//!    all terms non-negative, so no point costs a square root or a
 //!    division; b itself is taken once per cell, for the skip test.
 //!
 //! In [`Mode::Window`](crate::Mode::Window) both searches stop at the 3^d block, as the
@@ -69,11 +72,12 @@
 //! the same plane.
 //!
 //! ## Speed
-//! On scattered samples one border costs about 4.5 F2 − F1 evaluations
-//! (F1, finding F1's point again, and a search that reaches F1 + 2b,
-//! farther than F2, over the union of the cells the eight lanes need); on
-//! a grid about 5 through the tiles (23 to 32 per sample before). The peers
-//! bench (`peers/`) reports it beside F2 − F1.
+//! On scattered samples one border costs about 4 F2 − F1 evaluations (F1,
+//! then a search that reaches F1 + 2b, farther than F2, over the union of
+//! the cells the eight lanes need; finding F1's point again is one cell in
+//! nearly every lane, and a point's plane is skipped where no lane has it
+//! within reach); on a grid about 5.6 through the tiles (23 to 32 per
+//! sample before). The peers bench (`peers/`) reports it beside F2 − F1.
 
 use wide::{f32x8, u32x8};
 
