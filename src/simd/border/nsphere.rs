@@ -250,7 +250,9 @@ impl<const D: usize> SimdNSphere<D> {
             let x = grid.point(start + i);
             std::array::from_fn(|a| x[a] - f64::from(f1[i].delta[0][a]))
         };
-        let same = |p: &[f64; D], q: &[f64; D]| (0..D).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>() <= 1e-8;
+        // Within 10^−4 user units, from the difference per axis.
+        let close = |diff: &dyn Fn(usize) -> f64| (0..D).map(|a| diff(a).powi(2)).sum::<f64>() <= 1e-8;
+        let same = |p: &[f64; D], q: &[f64; D]| close(&|a| p[a] - q[a]);
         // Per sample, the index in `standing` of the sample whose result it
         // takes; `standing` lists the samples evaluated.
         let mut takes = vec![0usize; out.len()];
@@ -272,9 +274,7 @@ impl<const D: usize> SimdNSphere<D> {
             let neighbour = |j: usize, axis: usize| {
                 let (d, e) = (&f1[i].delta[0], &f1[j].delta[0]);
                 let moved = |a: usize| f64::from(d[a]) - f64::from(e[a]) - if a == axis { grid.step[a] } else { 0.0 };
-                f1[j].id[0] == id
-                    && f1[j].distance[0].is_finite()
-                    && (0..D).map(|a| moved(a).powi(2)).sum::<f64>() <= 1e-8
+                f1[j].id[0] == id && f1[j].distance[0].is_finite() && close(&moved)
             };
             if !i.is_multiple_of(width) && neighbour(i - 1, 0) {
                 takes[i] = takes[i - 1];

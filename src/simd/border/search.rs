@@ -88,9 +88,10 @@ impl<const D: usize> Simd<D, 1> {
         };
         for offset in &self.block {
             let c = frame.cell(offset);
-            let needs = L::and(open, L::le(c.rank, reach(&plane)));
+            let r = reach(&plane);
+            let needs = L::and(open, L::le(c.rank, r));
             if L::any(needs) {
-                self.border_cell::<L>(&c, needs, reach(&plane), nearest, &p1, &mut plane);
+                self.border_cell::<L>(&c, needs, r, nearest, &p1, &mut plane);
             }
         }
         if self.config.mode == Mode::Window {
@@ -107,9 +108,10 @@ impl<const D: usize> Simd<D, 1> {
             }
             for offset in shell::<D>(r + 1) {
                 let c = Frame::<L, D>::far_cell(at, &cell, &offset);
-                let needs = L::and(open, L::le(c.rank, reach(&plane)));
+                let r = reach(&plane);
+                let needs = L::and(open, L::le(c.rank, r));
                 if L::any(needs) {
-                    self.border_cell::<L>(&c, needs, reach(&plane), nearest, &p1, &mut plane);
+                    self.border_cell::<L>(&c, needs, r, nearest, &p1, &mut plane);
                 }
             }
         }
