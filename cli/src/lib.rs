@@ -9,6 +9,5 @@ pub mod commands;
 pub mod gallery;
 pub mod picture;
 pub mod render_cmd;
-pub mod runs;
 pub mod tune;
 pub mod views;

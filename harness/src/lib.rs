@@ -33,6 +33,8 @@ pub mod grids;
 pub mod oracle;
 pub mod repeats;
 pub mod report;
+#[cfg(feature = "runs")]
+pub mod runs;
 
 use std::time::Instant;
 
