@@ -9,5 +9,6 @@ pub mod commands;
 pub mod gallery;
 pub mod picture;
 pub mod render_cmd;
+pub mod runs;
 pub mod tune;
 pub mod views;

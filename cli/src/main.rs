@@ -12,8 +12,8 @@ use worley::{Config, Metric, Mode};
 use worley_cli::commands::{parse_metric, ranges, RangesArgs};
 use worley_cli::picture;
 use worley_cli::render_cmd::{render_command, RenderArgs};
+use worley_cli::runs::{run_reference, run_simd};
 use worley_cli::tune::{tune, TuneArgs};
-use worley_harness::runs::{run_reference, run_simd};
 use worley_harness::{Campaign, Report};
 
 #[derive(Parser)]

@@ -25,6 +25,10 @@
 //! Samples are drawn from a counter-based generator, so every figure is
 //! reproducible from the campaign's seed, and the parallel parts give the
 //! same counts on any number of threads.
+//!
+//! With the `runs` feature, the `runs` module runs a campaign at a
+//! dimension and order chosen at run time, with every kernel it needs
+//! compiled in this crate, where the workspace's test binaries share them.
 
 pub mod continuity;
 pub use continuity::{continuity, filtered_continuity, first_in_cell, lattice_coordinate, FilteredContinuity};
