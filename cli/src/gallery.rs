@@ -4,31 +4,12 @@
 use std::path::{Path, PathBuf};
 
 use crate::bake;
-use crate::picture::{self, ColourMap, Rgb};
+use crate::picture::{self, sheet, ColourMap, Rgb};
 use crate::render_cmd::{random_combinations, render_combo, Cells, RenderArgs, ShadeArg};
 use crate::views::{self as render, Window};
 use worley::config::DEFAULT_DENSITY;
 use worley::texture::Combination;
 use worley::{Config, Metric};
-
-/// Tiles of equal size into one sheet, `columns` across, `gap` white
-/// pixels apart (NaN in the values).
-pub fn sheet(tiles: &[(Vec<f32>, Rgb)], columns: usize, gap: usize) -> (Vec<f32>, Rgb) {
-    let (w, h) = (tiles[0].1.width, tiles[0].1.height);
-    let rows = tiles.len().div_ceil(columns);
-    let (sw, sh) = (columns * w + (columns - 1) * gap, rows * h + (rows - 1) * gap);
-    let mut pixels = vec![[255u8; 3]; sw * sh];
-    let mut values = vec![f32::NAN; sw * sh];
-    for (t, (v, img)) in tiles.iter().enumerate() {
-        let (x0, y0) = ((t % columns) * (w + gap), (t / columns) * (h + gap));
-        for y in 0..h {
-            let dst = (y0 + y) * sw + x0;
-            pixels[dst..dst + w].copy_from_slice(&img.pixels[y * w..(y + 1) * w]);
-            values[dst..dst + w].copy_from_slice(&v[y * w..(y + 1) * w]);
-        }
-    }
-    (values, Rgb { width: sw, height: sh, pixels })
-}
 
 /// The gallery: the chapter's figures and textures, into `dir`, each also
 /// as an EXR of its raw values (one `value` channel, NaN in the gaps between

@@ -459,7 +459,7 @@ pub fn render_command(args: &RenderArgs) -> Result<(), String> {
                 bar.inc(1);
             }
             bar.finish_and_clear();
-            crate::gallery::sheet(&tiles, (k as f64).sqrt().ceil() as usize, 2)
+            crate::picture::sheet(&tiles, (k as f64).sqrt().ceil() as usize, 2)
         }
         Some(k) => return Err(format!("--random-combos {k}: use 1 to 64")),
     };

@@ -50,8 +50,9 @@ use std::arch::x86_64::{
 use super::lanes::Lanes;
 use super::lanes::{broadcast_fma, WIDEST};
 use super::region::Band;
-use super::sample::{GridSample, Point};
+use super::sample::Point;
 use super::search::{FIRST, REST};
+use super::tiles::GridSample;
 use super::{runtime_avx512, Euclid, Features32, Outputs, Simd};
 use std::cell::Cell;
 

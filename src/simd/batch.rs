@@ -6,10 +6,12 @@
 
 use super::best::Best;
 use super::generate::UNIT;
+pub use super::grid::{Grid, SizeError, TILE};
 use super::locate::Located;
-use super::sample::{write_lanes, GridSample};
-pub use super::sample::{Grid, Point, SizeError, TILE};
+use super::sample::write_lanes;
+pub use super::sample::Point;
 use super::search::{Stages, FIRST, REST};
+use super::tiles::GridSample;
 use super::{Features32, Simd};
 use crate::definition::MAX_CELL_COORD;
 #[cfg(target_feature = "avx512f")]

@@ -91,11 +91,12 @@
 //! | `locate.rs` | a lane's cell, its neighbours' axis words and its fraction |
 //! | `search.rs` | the per-sample search and its certified widening |
 //! | `entry.rs` | building an evaluator, one point, eight, and the dispatch to a monomorphised search |
-//! | `sample.rs`, `region.rs` | what batches read and write per sample; a box of cells generated once and a band of grid rows |
+//! | `grid.rs`, `sample.rs`, `region.rs` | a regular grid of samples; what batches read per sample and how a result's lanes are written; a box of cells generated once and a band of grid rows |
+//! | `tiles.rs`, `tile.rs`, `coherent.rs` | the coherent path: rows of tiles and what a tile writes per sample, one tile's bound and certificate, the grid calls |
 //! | `avx512.rs` | the run-time sixteen-lane copies of slices and tiles |
-//! | `tiles.rs`, `tile.rs`, `coherent.rs` | the coherent path: rows of tiles, one tile's bound and certificate, the grid calls |
 //! | `batch.rs`, `periodic.rs` | slices, grids and points given as a cell plus a fraction; the tileable variant |
 //! | `border.rs`, `border/search.rs`, `border/tiles.rs` | the distance to the cell's border, its per-sample search and its grid tiles |
+//! | `border/nsphere.rs`, `border/smooth.rs`, `border/smooth/near.rs` | the n-sphere radius; compact smooth F1 and its search for the points within reach |
 //!
 //! ## Build flags
 //! `wide` chooses its instructions at compile time only. Build with
@@ -147,6 +148,7 @@ mod coherent;
 mod entry;
 mod features;
 mod generate;
+mod grid;
 pub mod lanes;
 mod level;
 mod locate;

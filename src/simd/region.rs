@@ -3,12 +3,12 @@
 //! the coherent path's tiles read.
 
 use super::generate::PointConstants;
+use super::grid::Grid;
 #[cfg(not(target_feature = "avx512f"))]
 use super::lanes::Eight;
 #[cfg(target_feature = "avx512f")]
 use super::lanes::Sixteen;
 use super::lanes::{Lanes, WIDEST};
-use super::sample::Grid;
 use super::Simd;
 use crate::definition::{axis_term, axis_word, feature_id, hash_words};
 

@@ -1,13 +1,15 @@
 //! The coherent path's rows of tiles: a band's tiles in order, each row of
 //! tiles sharing its rows of cells ([`Simd::cell_rows`]), the outputs
-//! prefetched a tile ahead.
+//! prefetched a tile ahead, and what a tile writes per sample
+//! ([`GridSample`]: whole results or distances alone).
 
 use super::best::Best;
 use super::generate::UNIT;
+use super::grid::Grid;
 use super::lanes::{Lanes, One, WIDEST};
 use super::region::{next_cell, Band, Region};
-use super::sample::GridSample;
-use super::{per_axis, Metric32, Outputs, Simd};
+use super::sample::write_lanes;
+use super::{per_axis, Features32, Metric32, Outputs, Simd};
 use crate::definition::INVALID_ID;
 use std::cell::Cell;
 
@@ -440,4 +442,92 @@ pub(super) fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
 
 pub(super) fn min_max(v: &[i64]) -> (i64, i64) {
     v.iter().fold((i64::MAX, i64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)))
+}
+
+/// What the coherent grid path writes per sample: whole results
+/// ([`Features32`], the outputs the [`Simd`] was built for) or the distances
+/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]). `Copy`, since a
+/// stripe of outputs is filled before its tiles write it.
+pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy {
+    /// Whether the tiles compute the outputs the [`Simd`] was built for;
+    /// false: distances only, whatever it was built for (the distances are
+    /// the same bits either way).
+    const FULL: bool;
+    /// Whether the region holds the points' IDs even where the tiles do not
+    /// read them (the border reads them after the tiles' search).
+    const REGION_IDS: bool = false;
+    /// A tile's results into its rows of `out`, from its search's raw
+    /// results (`best`, ranks in lane units, as [`Simd::tile`] leaves them)
+    /// and what the search read.
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, N>,
+        metric: M,
+        cells: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, N>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    );
+    /// Grid points `first..first + dst.len()` by the per-sample kernel.
+    fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]);
+}
+
+impl<const D: usize, const N: usize> GridSample<D, N> for Features32<D, N> {
+    const FULL: bool = true;
+    #[inline(always)]
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, N>,
+        _: M,
+        _: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, N>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    ) {
+        for (k, b) in best.iter_mut().enumerate().take(at.rows) {
+            simd.finish::<L, DELTAS>(b);
+            simd.forget_unasked::<L, IDS, DELTAS>(b);
+            write_lanes::<L, D, N, IDS, DELTAS>(b, at.row(out, k));
+        }
+    }
+    fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {
+        simd.grid_range(grid, first, dst)
+    }
+}
+
+impl<const D: usize, const N: usize> GridSample<D, N> for [f32; N] {
+    const FULL: bool = false;
+    #[inline(always)]
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, N>,
+        _: M,
+        _: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, N>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    ) {
+        for (k, b) in best.iter_mut().enumerate().take(at.rows) {
+            simd.finish::<L, DELTAS>(b);
+            let dst = at.row(out, k);
+            if N == 1 && dst.len() == L::N {
+                // One store of the lanes, the common case of a full tile row.
+                L::f_store(b.rank[0], dst.as_flattened_mut());
+                continue;
+            }
+            let mut distance = [[0.0; WIDEST]; N];
+            for (j, lanes) in distance.iter_mut().enumerate() {
+                L::f_store(b.rank[j], &mut lanes[..L::N]);
+            }
+            for (i, o) in dst.iter_mut().enumerate() {
+                *o = std::array::from_fn(|j| distance[j][i]);
+            }
+        }
+    }
+    fn per_sample(simd: &Simd<D, N>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {
+        let mut whole = [Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] }; 8];
+        for (c, chunk) in dst.chunks_mut(8).enumerate() {
+            simd.grid_range(grid, first + c * 8, &mut whole[..chunk.len()]);
+            for (o, f) in chunk.iter_mut().zip(&whole) {
+                *o = f.distance;
+            }
+        }
+    }
 }

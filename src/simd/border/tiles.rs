@@ -32,13 +32,13 @@
 
 use super::super::best::Best;
 use super::super::generate::UNIT;
+use super::super::grid::Grid;
 use super::super::lanes::{Lanes, One, WIDEST};
 use super::super::locate::Located;
 use super::super::region::Region;
-use super::super::sample::{Grid, GridSample};
 use super::super::tiles::{
-    inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, Tile, TileAt, TileCells, SLACK_ABS,
-    SLACK_REL,
+    inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, GridSample, Tile, TileAt, TileCells,
+    SLACK_ABS, SLACK_REL,
 };
 use super::super::{Metric32, Simd};
 use super::{border_one, eight_of, Border32, Plane, Results, SLACK};
