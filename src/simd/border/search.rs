@@ -88,10 +88,10 @@ impl<const D: usize> Simd<D, 1> {
         };
         for offset in &self.block {
             let c = frame.cell(offset);
-            let r = reach(&plane);
-            let needs = L::and(open, L::le(c.rank, r));
+            let limit = reach(&plane);
+            let needs = L::and(open, L::le(c.rank, limit));
             if L::any(needs) {
-                self.border_cell::<L>(&c, needs, r, nearest, &p1, &mut plane);
+                self.border_cell::<L>(&c, needs, limit, nearest, &p1, &mut plane);
             }
         }
         if self.config.mode == Mode::Window {
@@ -108,10 +108,10 @@ impl<const D: usize> Simd<D, 1> {
             }
             for offset in shell::<D>(r + 1) {
                 let c = Frame::<L, D>::far_cell(at, &cell, &offset);
-                let r = reach(&plane);
-                let needs = L::and(open, L::le(c.rank, r));
+                let limit = reach(&plane);
+                let needs = L::and(open, L::le(c.rank, limit));
                 if L::any(needs) {
-                    self.border_cell::<L>(&c, needs, r, nearest, &p1, &mut plane);
+                    self.border_cell::<L>(&c, needs, limit, nearest, &p1, &mut plane);
                 }
             }
         }
