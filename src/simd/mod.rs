@@ -180,8 +180,29 @@ use generate::PointConstants;
 /// or plain loops, wherever it builds lane sets per axis: in the run-time
 /// AVX-512 copy of a default build the iterator machinery behind `from_fn`
 /// stayed an out-of-line call compiled without the caller's instructions.
+///
+/// An index loop, not a `for` over `iter_mut().enumerate().skip(1)`: every
+/// closure is a type of its own, so each call is a copy per kernel type
+/// (some 3,500 in the command line's library), and this loop's LLVM IR is
+/// about half the iterator's (docs/measurements.md). One call keeps the
+/// iterator: [`per_axis_slots`].
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // the index loop is the point: see above
 pub(super) fn per_axis<T: Copy, const D: usize>(mut f: impl FnMut(usize) -> T) -> [T; D] {
+    let mut r = [f(0); D];
+    for a in 1..D {
+        r[a] = f(a);
+    }
+    r
+}
+
+/// [`per_axis`] over an iterator of the slots, for the per-sample search's
+/// offsets per cell of its 2^D block (`Simd::search`, inside the loop over
+/// the block's cells): there the index loop cost the per-sample border,
+/// compact smooth F1 and the n-sphere radius on random points 7 to 12 % of
+/// their speed (the peers bench, native build), which this form does not.
+#[inline(always)]
+pub(super) fn per_axis_slots<T: Copy, const D: usize>(mut f: impl FnMut(usize) -> T) -> [T; D] {
     let mut r = [f(0); D];
     for (a, slot) in r.iter_mut().enumerate().skip(1) {
         *slot = f(a);
@@ -225,7 +246,7 @@ pub struct Simd<const D: usize, const N: usize> {
 /// `border::runtime_avx2_tests`).
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx512f")))]
 pub(super) fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
-    std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
+    per_axis(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
 }
 
 /// Batch `batch` of eight points for the tests of the run-time AVX2
@@ -234,7 +255,7 @@ pub(super) fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 pub(super) fn test_batch<const D: usize>(seed: u64, batch: usize) -> [[f64; D]; 8] {
     let range = [40.0, 3.0e10][batch % 2];
-    let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(seed, batch * 8 + i, range));
+    let mut points: [[f64; D]; 8] = per_axis(|i| sample_point(seed, batch * 8 + i, range));
     if batch.is_multiple_of(7) {
         points[batch % 8][0] = f64::NAN;
     }

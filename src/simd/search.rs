@@ -7,7 +7,7 @@ use super::generate::{words, UNIT};
 use super::lanes::{Lanes, One, WIDEST};
 use super::locate::Located;
 use super::metric::Metric32;
-use super::{per_axis, Simd};
+use super::{per_axis, per_axis_slots, Simd};
 use crate::config::Mode;
 use crate::definition::INVALID_ID;
 use crate::reference::{shell, MAX_SHELLS};
@@ -88,7 +88,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             }
             let count = self.points.iter().take_while(|p| L::any(L::lt(self.key::<L>(p), most))).count();
             for c in 0..cells {
-                let sh = per_axis(|a| shifted[a][pick(c, a)]);
+                let sh = per_axis_slots(|a| shifted[a][pick(c, a)]);
                 for p in &self.points[..count] {
                     self.point::<L, M, IDS, DELTAS>(metric, p, h[c], sh, L::lt(self.key::<L>(p), top[c]), &mut best);
                 }
