@@ -246,7 +246,7 @@ pub struct Simd<const D: usize, const N: usize> {
 /// `border::runtime_avx2_tests`).
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx512f")))]
 pub(super) fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
-    per_axis(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
+    std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
 }
 
 /// Batch `batch` of eight points for the tests of the run-time AVX2
@@ -255,7 +255,7 @@ pub(super) fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [
 #[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
 pub(super) fn test_batch<const D: usize>(seed: u64, batch: usize) -> [[f64; D]; 8] {
     let range = [40.0, 3.0e10][batch % 2];
-    let mut points: [[f64; D]; 8] = per_axis(|i| sample_point(seed, batch * 8 + i, range));
+    let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(seed, batch * 8 + i, range));
     if batch.is_multiple_of(7) {
         points[batch % 8][0] = f64::NAN;
     }

@@ -3,8 +3,8 @@
 //! points, and one binary compiles each instantiation (dimension, order,
 //! metric, outputs, lanes) once, where a binary per file compiled it again
 //! in each file that used it; in a workspace `cargo test`, the kernels the
-//! harness's `runs` feature compiled are linked from there instead. Filter by module: `cargo test --test suite
-//! oracle::`. The SIMD kernel's entry points and lanes, which CI tests
+//! harness's `runs` feature compiled are linked from there instead. Filter
+//! by module: `cargo test --test suite oracle::`. The SIMD kernel's entry points and lanes, which CI tests
 //! again in each SIMD build, are the `lanes` binary (`tests/lanes/`).
 //! The long campaigns run in part by default and whole under `cargo test
 //! -- --ignored` ([`worley_harness::Tier`]).
