@@ -229,8 +229,10 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             return;
         }
         // IDs only where the tiles read them: whole results with IDs asked
-        // for, or of the other metrics, whose tiles always track them.
+        // for, distances with IDs, or the other metrics, whose tiles always
+        // track them.
         let ids = T::REGION_IDS
+            || T::IDS_ONLY
             || (T::FULL && (self.outputs != Outputs::Distances || self.config.metric != Metric::Euclidean));
         let band = Band { grid, axes, first, region: Region::generate(self, lo, hi, ids) };
         match Others::of(self.config.metric) {
@@ -302,8 +304,12 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         out: &mut [T],
     ) {
         // Distances alone compute nothing else, whatever the Simd was built
-        // for. A branch on the constant alone, so that an instantiation
-        // compiles only the loops it can run.
+        // for, and distances with IDs nothing more. A branch on the
+        // constants alone, so that an instantiation compiles only the loops
+        // it can run.
+        if T::IDS_ONLY {
+            return self.tiles::<L, K, M, T, true, false>(m, band, out);
+        }
         if !T::FULL {
             return self.tiles::<L, K, M, T, false, false>(m, band, out);
         }
@@ -329,7 +335,9 @@ impl<const D: usize, const N: usize> Simd<D, N> {
     /// compute nothing else.
     #[inline(never)]
     fn tiles_others<T: GridSample<D, N>>(&self, m: Others, band: &Band<'_, D>, out: &mut [T]) {
-        if T::FULL {
+        if T::IDS_ONLY {
+            T::per_sample(self, band.grid, band.first * band.grid.size[0], out)
+        } else if T::FULL {
             self.tiles::<Eight, 8, Others, T, true, true>(m, band, out)
         } else {
             self.tiles::<Eight, 8, Others, T, false, false>(m, band, out)

@@ -440,19 +440,70 @@ pub(super) fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
     L::f_load(&a[..L::N])
 }
 
+/// A sample's F1 (user units) and the ID of its point, 8 bytes where
+/// [`Features32`] takes 12 + 4·D: what a grid's n-sphere radii read to
+/// share their points ([`SimdNSphere`](super::SimdNSphere)).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Nearest {
+    /// F1 (NaN for bad input, +∞ for an empty window).
+    pub(crate) distance: f32,
+    /// Its point's ID ([`INVALID_ID`] where there is none).
+    pub(crate) id: u32,
+}
+
+impl<const D: usize> GridSample<D, 1> for Nearest {
+    const FULL: bool = true;
+    const IDS_ONLY: bool = true;
+    #[inline(always)]
+    fn tile_out<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+        simd: &Simd<D, 1>,
+        _: M,
+        _: TileCells<'_, L, D>,
+        best: &mut [Best<L, D, 1>; K],
+        out: &mut [Self],
+        at: &TileAt,
+    ) {
+        for (k, b) in best.iter_mut().enumerate().take(at.rows) {
+            simd.finish::<L, false>(b);
+            let (mut distance, mut id) = ([0.0; WIDEST], [INVALID_ID; WIDEST]);
+            L::f_store(b.rank[0], &mut distance[..L::N]);
+            L::u_store(b.id[0], &mut id[..L::N]);
+            for (i, o) in at.row(out, k).iter_mut().enumerate() {
+                *o = Nearest { distance: distance[i], id: id[i] };
+            }
+        }
+    }
+    fn per_sample(simd: &Simd<D, 1>, grid: &Grid<D>, first: usize, dst: &mut [Self]) {
+        let mut whole = [Features32 { distance: [0.0], delta: [[0.0; D]], id: [0] }; 8];
+        for (c, chunk) in dst.chunks_mut(8).enumerate() {
+            simd.grid_range(grid, first + c * 8, &mut whole[..chunk.len()]);
+            for (o, f) in chunk.iter_mut().zip(&whole) {
+                *o = Nearest { distance: f.distance[0], id: f.id[0] };
+            }
+        }
+    }
+}
+
 pub(super) fn min_max(v: &[i64]) -> (i64, i64) {
     v.iter().fold((i64::MAX, i64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)))
 }
 
 /// What the coherent grid path writes per sample: whole results
-/// ([`Features32`], the outputs the [`Simd`] was built for) or the distances
-/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]). `Copy`, since a
-/// stripe of outputs is filled before its tiles write it.
+/// ([`Features32`], the outputs the [`Simd`] was built for), the distances
+/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]) or F1 with its
+/// ID ([`Nearest`]). `Copy`, since a stripe of outputs is filled before its
+/// tiles write it.
 pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy {
     /// Whether the tiles compute the outputs the [`Simd`] was built for;
     /// false: distances only, whatever it was built for (the distances are
     /// the same bits either way).
     const FULL: bool;
+    /// Whether the tiles compute distances and IDs alone, whatever the
+    /// [`Simd`] was built for (the same bits either way), and only for the
+    /// Euclidean metric: the other metrics' samples then take the
+    /// per-sample kernel, so that no tile loop of theirs is compiled for
+    /// it.
+    const IDS_ONLY: bool = false;
     /// Whether the region holds the points' IDs even where the tiles do not
     /// read them (the border reads them after the tiles' search).
     const REGION_IDS: bool = false;

@@ -33,21 +33,20 @@
 //! [`Mode::Window`](crate::Mode::Window) a centre whose 3^d block holds no
 //! other point gives +∞ and [`INVALID_ID`] for the neighbour.
 
-use std::collections::HashMap;
-
 use wide::{f32x8, u32x8};
 
 use super::super::batch::in_cell;
 use super::super::best::Best;
-use super::super::coherent::GridRows;
 use super::super::generate::UNIT;
 use super::super::lanes::{Eight, Lanes, One, WIDEST};
 use super::super::locate::Located;
 use super::super::periodic::wrap;
-use super::super::{by_eights, Features32, Grid, Outputs, Period, Point, Simd, SizeError, SERIAL_BAND};
+use super::super::{by_eights, Grid, Outputs, Period, Point, Simd, SizeError, SERIAL_BAND};
 use super::search::Frame;
 use crate::config::{Config, ConfigError, Metric};
 use crate::definition::{FRACTION_BITS, INVALID_ID};
+
+mod shared;
 
 /// One sample's n-sphere radius (user units) with the IDs of the sphere's
 /// centre (F1's point) and of the point nearest to it.
@@ -121,6 +120,9 @@ pub struct SimdNSphere<const D: usize> {
     first: Simd<D, 1>,
     /// F1 and F2 with IDs, evaluated at F1's point.
     around: Simd<D, 2>,
+    /// F1 with its ID alone: what a grid's samples need to share their
+    /// points ([`SimdNSphere::by_points`]).
+    ids: Simd<D, 1>,
 }
 
 /// Per lane: whether F1's point was found, its ID, its cell and its
@@ -145,6 +147,7 @@ impl<const D: usize> SimdNSphere<D> {
         Ok(SimdNSphere {
             first: Simd::new(Config { order: 1, ..config }, Outputs::IdsAndDeltas)?,
             around: Simd::new(Config { order: 2, ..config }, Outputs::Ids)?,
+            ids: Simd::new(Config { order: 1, ..config }, Outputs::Ids)?,
         })
     }
 
@@ -226,84 +229,6 @@ impl<const D: usize> SimdNSphere<D> {
             self.grid_rows_into(&rows, b * SERIAL_BAND, dst);
         }
         Ok(())
-    }
-
-    /// Rows `first..` of a grid (whole rows; `rows` from a kernel of this
-    /// configuration) into `out`: the bits [`SimdNSphere::n_sphere_grid`]
-    /// writes for them. The radius depends on F1's point alone, and a
-    /// grid's neighbouring samples mostly share it: F1 with its ID and
-    /// delta comes from the grid tiles (the per-sample kernel's bits), the
-    /// samples whose F1 has the same ID and, within 10^−4 user units, the
-    /// same position x − δ share one sample's result, and only that sample
-    /// runs the per-sample path (F1, its point, F2 there). Two different
-    /// points would have to share a 32-bit ID within 10^−4 of each other to
-    /// be taken for one.
-    pub(crate) fn grid_rows_into(&self, rows: &GridRows<'_, D>, first: usize, out: &mut [NSphere32]) {
-        if out.is_empty() {
-            return;
-        }
-        let grid = rows.grid();
-        let start = first * grid.size[0];
-        let mut f1 = vec![Features32::<D, 1>::default(); out.len()];
-        self.first.grid_rows_into(rows, first, &mut f1);
-        let centre = |i: usize| -> [f64; D] {
-            let x = grid.point(start + i);
-            std::array::from_fn(|a| x[a] - f64::from(f1[i].delta[0][a]))
-        };
-        // Within 10^−4 user units, from the difference per axis.
-        let close = |diff: &dyn Fn(usize) -> f64| (0..D).map(|a| diff(a).powi(2)).sum::<f64>() <= 1e-8;
-        let same = |p: &[f64; D], q: &[f64; D]| close(&|a| p[a] - q[a]);
-        // Per sample, the index in `standing` of the sample whose result it
-        // takes; `standing` lists the samples evaluated.
-        let mut takes = vec![0usize; out.len()];
-        let mut standing: Vec<(usize, [f64; D])> = Vec::new();
-        let mut by_id: HashMap<u32, usize> = HashMap::new();
-        let width = grid.size[0];
-        for i in 0..out.len() {
-            let (id, f) = (f1[i].id[0], f1[i].distance[0]);
-            if !f.is_finite() {
-                // Bad input or an empty window: its own evaluation.
-                takes[i] = standing.len();
-                standing.push((i, [f64::NAN; D]));
-                continue;
-            }
-            // The common cases first: the previous sample of the row (one
-            // step along axis 0 away) or the sample of the previous row (one
-            // step along axis 1) has the same ID, and its delta differs by
-            // that step.
-            let neighbour = |j: usize, axis: usize| {
-                let (d, e) = (&f1[i].delta[0], &f1[j].delta[0]);
-                let moved = |a: usize| f64::from(d[a]) - f64::from(e[a]) - if a == axis { grid.step[a] } else { 0.0 };
-                f1[j].id[0] == id && f1[j].distance[0].is_finite() && close(&moved)
-            };
-            if !i.is_multiple_of(width) && neighbour(i - 1, 0) {
-                takes[i] = takes[i - 1];
-                continue;
-            }
-            // (Rows count over axis 1 first: the previous row lies one step
-            // along axis 1 unless this row starts a slice.)
-            if i >= width && !(first + i / width).is_multiple_of(grid.size[1]) && neighbour(i - width, 1) {
-                takes[i] = takes[i - width];
-                continue;
-            }
-            let p = centre(i);
-            match by_id.get(&id) {
-                Some(&k) if same(&standing[k].1, &p) => takes[i] = k,
-                _ => {
-                    by_id.insert(id, standing.len());
-                    takes[i] = standing.len();
-                    standing.push((i, p));
-                }
-            }
-        }
-        let mut results = vec![NSphere32::INVALID; standing.len()];
-        for (chunk, dst) in standing.chunks(8).zip(results.chunks_mut(8)) {
-            let block: [[f64; D]; 8] = std::array::from_fn(|k| grid.point(start + chunk[k.min(chunk.len() - 1)].0));
-            dst.copy_from_slice(&self.n_sphere8(&block).lanes()[..dst.len()]);
-        }
-        for (o, &k) in out.iter_mut().zip(&takes) {
-            *o = results[k];
-        }
     }
 
     /// One located sample (`period` the pattern's, if it has one).
