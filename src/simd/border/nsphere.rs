@@ -18,10 +18,12 @@
 //!    the smaller ID, the kernel puts it first: it is then the neighbour,
 //!    at distance 0, as in the reference.
 //!
-//! On a grid ([`SimdNSphere::n_sphere_grid`]) F1 comes from the grid
-//! tiles, and the samples whose F1 is the same point share the result of
-//! the first of them to run the steps above: the radius depends on F1's
-//! point alone.
+//! On a grid ([`SimdNSphere::n_sphere_grid`]) F1 and its ID come from the
+//! grid tiles, and every point is evaluated once for all the samples it is
+//! F1 of, since the radius depends on F1's point alone. Where the IDs tell
+//! the points apart (checked on the generated cells around the samples),
+//! the point's position comes from those cells and only step 2 runs;
+//! otherwise one sample per point runs both steps.
 //!
 //! The radius is F2's distance halved (exact in f32), so its error is F2's
 //! at an exact position: at most 2ε(2r + 1/S) against the f64 reference,
@@ -47,6 +49,12 @@ use crate::config::{Config, ConfigError, Metric};
 use crate::definition::{FRACTION_BITS, INVALID_ID};
 
 mod shared;
+
+/// Samples of a grid that share their points' evaluations
+/// ([`SimdNSphere::n_sphere_grid`]), as whole bands of [`SERIAL_BAND`] rows
+/// (at least one): a point F1 of samples in two such parts is evaluated
+/// twice, and its cells generated twice.
+const SHARED_SAMPLES: usize = 1 << 16;
 
 /// One sample's n-sphere radius (user units) with the IDs of the sphere's
 /// centre (F1's point) and of the point nearest to it.
@@ -215,7 +223,9 @@ impl<const D: usize> SimdNSphere<D> {
         by_eights(xs, out, |block| self.n_sphere8(block).lanes())
     }
 
-    /// Every point of a grid (axis 0 fastest), eight at a time.
+    /// Every point of a grid (axis 0 fastest): the bits of
+    /// [`SimdNSphere::n_sphere`] at each, with one evaluation per feature
+    /// point that is some sample's F1 (see the [module's text](self)).
     ///
     /// # Errors
     /// [`SizeError`] if `out.len() != grid.len()`; nothing is written.
@@ -225,8 +235,10 @@ impl<const D: usize> SimdNSphere<D> {
             return Err(SizeError { needed, given: out.len() });
         }
         let rows = self.first.grid_rows(grid);
-        for (b, dst) in out.chunks_mut(SERIAL_BAND * grid.size[0].max(1)).enumerate() {
-            self.grid_rows_into(&rows, b * SERIAL_BAND, dst);
+        let width = grid.size[0].max(1);
+        let band = SERIAL_BAND * (SHARED_SAMPLES / (SERIAL_BAND * width)).max(1);
+        for (b, dst) in out.chunks_mut(band * width).enumerate() {
+            self.grid_rows_into(&rows, b * band, dst);
         }
         Ok(())
     }

@@ -19,7 +19,7 @@ use super::super::super::coherent::GridRows;
 use super::super::super::lanes::Eight;
 use super::super::super::region::{next_cell, Region};
 use super::super::super::tiles::Nearest;
-use super::super::super::{Features32, Grid};
+use super::super::super::{Features32, Grid, SERIAL_BAND};
 use super::{sphere, NSphere32, SimdNSphere};
 use crate::definition::{FRACTION_BITS, INVALID_ID, MAX_CELL_COORD};
 
@@ -37,15 +37,21 @@ impl<const D: usize> SimdNSphere<D> {
             return;
         }
         let grid = rows.grid();
+        let width = grid.size[0];
         if dense(grid, first, out.len(), self.first.pattern.scale()) {
             let mut f1 = vec![Nearest::default(); out.len()];
-            self.ids.grid_rows_into(rows, first, &mut f1);
+            // The tiles a band of rows at a time, as the grid calls take them.
+            for (b, dst) in f1.chunks_mut(SERIAL_BAND * width).enumerate() {
+                self.ids.grid_rows_into(rows, first + b * SERIAL_BAND, dst);
+            }
             if self.by_points(grid, first, &f1, out) {
                 return;
             }
         }
         let mut f1 = vec![Features32::<D, 1>::default(); out.len()];
-        self.first.grid_rows_into(rows, first, &mut f1);
+        for (b, dst) in f1.chunks_mut(SERIAL_BAND * width).enumerate() {
+            self.first.grid_rows_into(rows, first + b * SERIAL_BAND, dst);
+        }
         self.by_samples(grid, first, &f1, out);
     }
 
@@ -430,6 +436,19 @@ mod tests {
         // Windows that hold no point: runs without an F1 (INVALID_ID).
         let sparse = Config { mode: Mode::Window, density: 0.3, ..config };
         assert!(check::<2>(sparse, 0.2, false) > 0, "no sample without an F1, so those runs went untested");
+    }
+
+    #[test]
+    fn a_grid_taller_than_a_band_shares_its_points_across_the_bands() {
+        let s = SimdNSphere::<2>::new(Config { density: 2.0, seed: 3, ..Config::default() }).unwrap();
+        let grid = Grid { origin: [0.3, -4.1], step: [0.04, 0.04], size: [8, 2 * SERIAL_BAND + 44] };
+        let n = grid.len().unwrap();
+        assert!(dense(&grid, 0, n, s.first.pattern.scale()));
+        let mut out = vec![NSphere32::INVALID; n];
+        s.n_sphere_grid(&grid, &mut out).unwrap();
+        for (i, g) in out.iter().enumerate() {
+            assert_eq!(bits(g), bits(&s.n_sphere(grid.point(i))), "sample {i}");
+        }
     }
 
     #[test]
