@@ -19,11 +19,11 @@
 //!    at distance 0, as in the reference.
 //!
 //! On a grid ([`SimdNSphere::n_sphere_grid`]) F1 and its ID come from the
-//! grid tiles, and every point is evaluated once for all the samples it is
-//! F1 of, since the radius depends on F1's point alone. Where the IDs tell
-//! the points apart (checked on the generated cells around the samples),
-//! the point's position comes from those cells and only step 2 runs;
-//! otherwise one sample per point runs both steps.
+//! grid tiles, and every point is evaluated once for all the samples of a
+//! band of rows it is F1 of, since the radius depends on F1's point alone.
+//! Where the IDs tell the points apart (checked on the generated cells
+//! around the samples), the point's position comes from those cells and
+//! only step 2 runs; otherwise one sample per point runs both steps.
 //!
 //! The radius is F2's distance halved (exact in f32), so its error is F2's
 //! at an exact position: at most 2ε(2r + 1/S) against the f64 reference,
@@ -49,12 +49,6 @@ use crate::config::{Config, ConfigError, Metric};
 use crate::definition::{FRACTION_BITS, INVALID_ID};
 
 mod shared;
-
-/// Samples of a grid that share their points' evaluations
-/// ([`SimdNSphere::n_sphere_grid`]), as whole bands of [`SERIAL_BAND`] rows
-/// (at least one): a point F1 of samples in two such parts is evaluated
-/// twice, and its cells generated twice.
-const SHARED_SAMPLES: usize = 1 << 16;
 
 /// One sample's n-sphere radius (user units) with the IDs of the sphere's
 /// centre (F1's point) and of the point nearest to it.
@@ -235,10 +229,8 @@ impl<const D: usize> SimdNSphere<D> {
             return Err(SizeError { needed, given: out.len() });
         }
         let rows = self.first.grid_rows(grid);
-        let width = grid.size[0].max(1);
-        let band = SERIAL_BAND * (SHARED_SAMPLES / (SERIAL_BAND * width)).max(1);
-        for (b, dst) in out.chunks_mut(band * width).enumerate() {
-            self.grid_rows_into(&rows, b * band, dst);
+        for (b, dst) in out.chunks_mut(SERIAL_BAND * grid.size[0].max(1)).enumerate() {
+            self.grid_rows_into(&rows, b * SERIAL_BAND, dst);
         }
         Ok(())
     }

@@ -19,7 +19,7 @@ use super::super::super::coherent::GridRows;
 use super::super::super::lanes::Eight;
 use super::super::super::region::{next_cell, Region};
 use super::super::super::tiles::Nearest;
-use super::super::super::{Features32, Grid, SERIAL_BAND};
+use super::super::super::{Features32, Grid};
 use super::{sphere, NSphere32, SimdNSphere};
 use crate::definition::{FRACTION_BITS, INVALID_ID, MAX_CELL_COORD};
 
@@ -37,21 +37,15 @@ impl<const D: usize> SimdNSphere<D> {
             return;
         }
         let grid = rows.grid();
-        let width = grid.size[0];
         if dense(grid, first, out.len(), self.first.pattern.scale()) {
             let mut f1 = vec![Nearest::default(); out.len()];
-            // The tiles a band of rows at a time, as the grid calls take them.
-            for (b, dst) in f1.chunks_mut(SERIAL_BAND * width).enumerate() {
-                self.ids.grid_rows_into(rows, first + b * SERIAL_BAND, dst);
-            }
+            self.ids.grid_rows_into(rows, first, &mut f1);
             if self.by_points(grid, first, &f1, out) {
                 return;
             }
         }
         let mut f1 = vec![Features32::<D, 1>::default(); out.len()];
-        for (b, dst) in f1.chunks_mut(SERIAL_BAND * width).enumerate() {
-            self.first.grid_rows_into(rows, first + b * SERIAL_BAND, dst);
-        }
+        self.first.grid_rows_into(rows, first, &mut f1);
         self.by_samples(grid, first, &f1, out);
     }
 
@@ -384,6 +378,7 @@ impl IdTable {
 
 #[cfg(test)]
 mod tests {
+    use super::super::super::super::SERIAL_BAND;
     use super::*;
     use crate::config::{Config, Mode};
 
@@ -439,7 +434,7 @@ mod tests {
     }
 
     #[test]
-    fn a_grid_taller_than_a_band_shares_its_points_across_the_bands() {
+    fn a_grid_taller_than_a_band_gives_the_bits_of_each_sample() {
         let s = SimdNSphere::<2>::new(Config { density: 2.0, seed: 3, ..Config::default() }).unwrap();
         let grid = Grid { origin: [0.3, -4.1], step: [0.04, 0.04], size: [8, 2 * SERIAL_BAND + 44] };
         let n = grid.len().unwrap();
