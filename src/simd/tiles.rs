@@ -442,7 +442,9 @@ pub(super) fn lanes_from<L: Lanes>(a: &[f32; WIDEST]) -> L::F {
 
 /// A sample's F1 (user units) and the ID of its point, 8 bytes where
 /// [`Features32`] takes 12 + 4·D: what a grid's n-sphere radii read to
-/// share their points ([`SimdNSphere`](super::SimdNSphere)).
+/// share their points ([`SimdNSphere`](super::SimdNSphere)), from a kernel
+/// built with IDs (the per-sample kernel, which some samples take, reports
+/// them only then).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Nearest {
     /// F1 (NaN for bad input, +∞ for an empty window).
@@ -498,11 +500,10 @@ pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy
     /// false: distances only, whatever it was built for (the distances are
     /// the same bits either way).
     const FULL: bool;
-    /// Whether the tiles compute distances and IDs alone, whatever the
-    /// [`Simd`] was built for (the same bits either way), and only for the
-    /// Euclidean metric: the other metrics' samples then take the
-    /// per-sample kernel, so that no tile loop of theirs is compiled for
-    /// it.
+    /// Whether the tiles compute distances and IDs alone (the same bits as
+    /// with deltas), and only for the Euclidean metric: the other metrics'
+    /// samples then take the per-sample kernel, so that no tile loop of
+    /// theirs is compiled for it.
     const IDS_ONLY: bool = false;
     /// Whether the region holds the points' IDs even where the tiles do not
     /// read them (the border reads them after the tiles' search).

@@ -53,8 +53,10 @@ impl<const D: usize> SimdNSphere<D> {
     /// sharing one evaluation per F1 point, the points told apart by their
     /// IDs alone. That holds where no two points that could be a sample's
     /// F1 share an ID, which this checks: every such point lies within the
-    /// samples' box of cells widened by the largest F1, and the box's
-    /// points are generated and their IDs matched against the samples'.
+    /// samples' box of cells widened by the largest F1 at the ends of the
+    /// rows' runs of one ID (or two of the box's points share an ID), and
+    /// the box's points are generated and their IDs matched against the
+    /// samples'.
     /// Each point is then evaluated at its exact position, as the
     /// per-sample path finds it (F2 there), with no search for F1 or its
     /// point.
@@ -73,9 +75,15 @@ impl<const D: usize> SimdNSphere<D> {
         let mut runs: Vec<(usize, u32)> = Vec::new();
         let mut ids: Vec<u32> = Vec::new();
         let mut index = IdTable::new();
-        // The largest F1, as bits (finite distances are not negative, so
-        // their bits order as they do). F1 along a run is the distance to
-        // one point, largest at one of the run's ends.
+        // The largest F1 at the runs' ends, as bits (finite distances are
+        // not negative, so their bits order as they do). The box widened
+        // by it holds every sample's F1 point, or else two of its points
+        // share an ID and the box shows it. The F1 points of a run's ends
+        // are within it of those ends. If the two are one point P, every
+        // sample between them has F1 at most its distance to P, which
+        // along the row is largest at an end: its own F1 point is within
+        // the reach too. (The margin's extra cell covers the rounding of
+        // f32 distances.)
         let mut reach = 0u32;
         // The previous row's runs, in `runs`.
         let mut above = 0..0;
