@@ -1,13 +1,11 @@
 //! The border distance under fuzzing: [`SimdBorder`] through every entry
 //! point against the f64 [`Reference::border`]; on the same points, compact
-//! smooth F1 ([`SimdSmooth`]) against [`Reference::smooth_f1_compact`]; and
-//! the n-sphere radius on a small grid ([`SimdNSphere::n_sphere_grid`])
-//! against its one-point call.
+//! smooth F1 ([`SimdSmooth`]) against [`Reference::smooth_f1_compact`].
 
 use worley::config::{Config, Mode};
 use worley::definition::{Pattern, INVALID_ID};
 use worley::reference::Reference;
-use worley::simd::{Border32, Grid, NSphere32, SimdBorder, SimdNSphere, SimdSmooth, Smooth32};
+use worley::simd::{Border32, SimdBorder, SimdSmooth, Smooth32};
 
 use super::Bytes;
 
@@ -37,10 +35,7 @@ fn same_bits<const D: usize>(a: &Border32<D>, b: &Border32<D>) -> bool {
 /// smoothness (0 to 1.5 user units) on the same points: the same bits
 /// through every entry point, invalid exactly where the reference is, +∞
 /// where it is, the value within 4ε(R + 1/S) + ε|S| (R the reach) and
-/// F1's point the same unless F1 and F2 tie. Last, a grid of the n-sphere
-/// radius at the first point (16 × 12, two samples along any further
-/// axis) with a decoded step from 1/500 to 1 cell: every sample the bits
-/// of the one-point call (the grid shares its points' evaluations).
+/// F1's point the same unless F1 and F2 tie.
 #[inline]
 pub fn border(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
@@ -71,9 +66,6 @@ fn border_in<const D: usize>(config: Config, b: &mut Bytes) {
     }
     let s = [0.0, 0.05, 0.1, 0.3, 1.0, 1.5][usize::from(b.byte() % 6)];
     smooth_in::<D>(config, &points, s);
-    // Decoded after the rest, so that kept inputs keep what they meant.
-    let step = [0.002, 0.02, 0.05, 0.13, 0.4, 1.0][usize::from(b.byte() % 6)] / reference.pattern().scale();
-    n_sphere_in::<D>(config, points[0], step);
     let eight = simd.border8(&points);
     let mut slice = [Border32::<D>::default(); 8];
     simd.border_slice(&points, &mut slice).expect("room for eight");
@@ -151,23 +143,6 @@ fn plane_distance<const D: usize>(
     let (p1, pj) = (p1?, pj?);
     let apart = (0..D).map(|a| (pj[a] - p1[a]) * (pj[a] - p1[a])).sum::<f64>().sqrt();
     Some((squared(&pj) - squared(&p1)) / (2.0 * apart) / pattern.scale())
-}
-
-fn n_sphere_in<const D: usize>(config: Config, origin: [f64; D], step: f64) {
-    let simd = SimdNSphere::<D>::new(config).expect("a valid Euclidean configuration");
-    let grid = Grid { origin, step: [step; D], size: std::array::from_fn(|a| [16, 12, 2, 2][a]) };
-    let mut out = vec![NSphere32::INVALID; grid.len().expect("a small grid")];
-    simd.n_sphere_grid(&grid, &mut out).expect("room for the grid");
-    let bits = |n: &NSphere32| (n.radius.to_bits(), n.feature, n.neighbour);
-    for (i, got) in out.iter().enumerate() {
-        let x = grid.point(i);
-        let one = simd.n_sphere(x);
-        assert_eq!(
-            bits(got),
-            bits(&one),
-            "{config:?} step {step}: grid sample {i} at {x:?} differs from the one-point call"
-        );
-    }
 }
 
 fn smooth_in<const D: usize>(config: Config, points: &[[f64; D]; 8], s: f32) {

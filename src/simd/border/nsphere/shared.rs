@@ -433,7 +433,6 @@ mod tests {
             assert_eq!(check::<2>(Config { seed, ..config }, 0.04, true), 0);
             assert_eq!(check::<3>(Config { seed, ..config }, 0.04, true), 0);
         }
-        assert_eq!(check::<4>(config, 0.05, true), 0);
         // Eight steps over more than a cell: F1 per sample.
         assert_eq!(check::<3>(config, 0.3, false), 0);
         // Windows that hold no point: runs without an F1 (INVALID_ID).
