@@ -492,9 +492,10 @@ pub(super) fn min_max(v: &[i64]) -> (i64, i64) {
 
 /// What the coherent grid path writes per sample: whole results
 /// ([`Features32`], the outputs the [`Simd`] was built for), the distances
-/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]) or F1 with its
-/// ID ([`Nearest`]). `Copy`, since a stripe of outputs is filled before its
-/// tiles write it.
+/// alone (`[f32; N]`, see [`Simd::evaluate_grid_distances`]), F1 with its
+/// ID ([`Nearest`]), or the border's results (`Border32`, in the border's
+/// tiles). `Copy`, since a stripe of outputs is filled before its tiles
+/// write it.
 pub(super) trait GridSample<const D: usize, const N: usize>: Sized + Send + Copy {
     /// Whether the tiles compute the outputs the [`Simd`] was built for;
     /// false: distances only, whatever it was built for (the distances are
