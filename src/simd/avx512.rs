@@ -21,7 +21,7 @@
 //! Every operation of [`Avx512`] calls an AVX-512 intrinsic, which is
 //! sound only on a CPU that has AVX-512. The type is private to this
 //! module, so the only code that can instantiate the kernel over it is
-//! [`Simd::slice_avx512`] and [`Simd::tiles_avx512`] (the coherent path's
+//! [`slice_avx512`] and [`tiles_avx512`] (the coherent path's
 //! tiles) below, and their only calls are in [`evaluate_slice`] and
 //! [`tiles`], after [`runtime_avx512`] has seen the CPU report the
 //! features. [`Avx512::broadcast_add_on_fma`] calls the one instruction of
@@ -65,7 +65,7 @@ struct Avx512;
 
 // SAFETY, for every `unsafe` block in this impl: the intrinsic needs
 // AVX-512 (F, and VL/BW/DQ for none of these), and `Avx512` is only ever
-// used inside `Simd::slice_avx512`, which runs only after the CPU reported
+// used inside `slice_avx512`, which runs only after the CPU reported
 // the x86-64-v4 features (see the module docs). Loads and stores go through
 // slices already cut to sixteen elements, so the pointers are in bounds.
 impl Lanes for Avx512 {
@@ -249,31 +249,38 @@ impl Lanes for Avx512 {
     }
 }
 
-impl<const D: usize, const N: usize> Simd<D, N> {
-    /// The Euclidean slice kernel in sixteen AVX-512 lanes, compiled with
-    /// the x86-64-v4 features for a build that lacks them.
-    ///
-    /// # Safety
-    /// The CPU must have AVX-512 F, BW, DQ and VL ([`runtime_avx512`]).
-    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    unsafe fn slice_avx512<P: Point<D>>(&self, xs: &[P], out: &mut [Features32<D, N>]) {
-        self.slice_in_stages::<Avx512, P>(
-            xs,
-            out,
-            |at, start| self.dispatch_euclid_stage::<Avx512, FIRST>(at, start),
-            |at, start| self.dispatch_euclid_stage::<Avx512, REST>(at, start),
-        );
-    }
+/// The Euclidean slice kernel in sixteen AVX-512 lanes, compiled with
+/// the x86-64-v4 features for a build that lacks them.
+///
+/// # Safety
+/// The CPU must have AVX-512 F, BW, DQ and VL ([`runtime_avx512`]).
+#[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
+unsafe fn slice_avx512<const D: usize, const N: usize, P: Point<D>>(
+    kernel: &Simd<D, N>,
+    xs: &[P],
+    out: &mut [Features32<D, N>],
+) {
+    kernel.slice_in_stages::<Avx512, P>(
+        xs,
+        out,
+        |at, start| kernel.dispatch_euclid_stage::<Avx512, FIRST>(at, start),
+        |at, start| kernel.dispatch_euclid_stage::<Avx512, REST>(at, start),
+    );
+}
 
-    /// The coherent path's Euclidean tiles of a band in these lanes,
-    /// sixteen samples by sixteen rows each.
-    ///
-    /// # Safety
-    /// As [`Simd::slice_avx512`].
-    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    unsafe fn tiles_avx512<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
-        self.tiles_for::<Avx512, 16, _, T>(Euclid, o, band, out)
-    }
+/// The coherent path's Euclidean tiles of a band in these lanes,
+/// sixteen samples by sixteen rows each.
+///
+/// # Safety
+/// As [`slice_avx512`].
+#[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
+unsafe fn tiles_avx512<const D: usize, const N: usize, T: GridSample<D, N>>(
+    kernel: &Simd<D, N>,
+    o: Outputs,
+    band: &Band<'_, D>,
+    out: &mut [T],
+) {
+    kernel.tiles_for::<Avx512, 16, _, T>(Euclid, o, band, out)
 }
 
 /// Runs `simd.evaluate_slice`'s work in sixteen AVX-512 lanes and returns
@@ -291,7 +298,7 @@ pub(super) fn evaluate_slice<const D: usize, const N: usize, P: Point<D>>(
     }
     // SAFETY: `runtime_avx512` has just seen the CPU report every feature
     // `slice_avx512` enables.
-    unsafe { simd.slice_avx512(xs, out) };
+    unsafe { slice_avx512(simd, xs, out) };
     true
 }
 
@@ -310,7 +317,7 @@ pub(super) fn tiles<const D: usize, const N: usize, T: GridSample<D, N>>(
     }
     // SAFETY: `runtime_avx512` has just seen the CPU report every feature
     // `tiles_avx512` enables.
-    unsafe { simd.tiles_avx512(o, band, out) };
+    unsafe { tiles_avx512(simd, o, band, out) };
     true
 }
 

@@ -541,7 +541,7 @@ mod runtime_avx2_tests {
             let (plain, plain_found) = k.border_search::<Eight>(&at, &raw);
             // SAFETY: `runtime_avx2` returned true above.
             #[allow(unsafe_code)]
-            let (avx2, avx2_found) = unsafe { k.border_search_avx2(&at, &raw) };
+            let (avx2, avx2_found) = unsafe { search::border_search_avx2(k, &at, &raw) };
             let bits = |v: f32x8| v.to_array().map(f32::to_bits);
             let what = format!("{D}D batch {batch}");
             assert_eq!(bits(plain.key), bits(avx2.key), "{what}: k");

@@ -237,7 +237,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         let band = Band { grid, axes, first, region: Region::generate(self, lo, hi, ids) };
         match Others::of(self.config.metric) {
             None => self.tiles_euclid(self.outputs, &band, out),
-            Some(m) => self.tiles_others(m, &band, out),
+            Some(m) => tiles_others(self, m, &band, out),
         }
     }
 
@@ -273,7 +273,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 // SAFETY: `tiles_avx2` requires AVX2 and nothing else, and
                 // `runtime_avx2` has just seen the CPU report it.
                 #[allow(unsafe_code)]
-                return unsafe { self.tiles_avx2(o, band, out) };
+                return unsafe { tiles_avx2(self, o, band, out) };
             }
             // A CPU without AVX2 (x86-64 before 2013, or a ceiling of
             // SSE2): the per-sample kernel, the same bits. A copy of the
@@ -284,16 +284,23 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         // Out of line, as the other metrics' loops: where sixteen lanes run,
         // this copy would otherwise sit inside theirs.
         #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx2"))))]
-        self.tiles_eight(o, band, out)
+        tiles_eight(self, o, band, out)
     }
+}
 
-    /// [`Simd::tiles_euclid`]'s eight-lane loops compiled with AVX2 enabled.
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-    #[target_feature(enable = "avx2")]
-    fn tiles_avx2<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
-        self.tiles_for::<Eight, 8, _, T>(Euclid, o, band, out)
-    }
+/// [`Simd::tiles_euclid`]'s eight-lane loops compiled with AVX2 enabled.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+#[target_feature(enable = "avx2")]
+fn tiles_avx2<const D: usize, const N: usize, T: GridSample<D, N>>(
+    kernel: &Simd<D, N>,
+    o: Outputs,
+    band: &Band<'_, D>,
+    out: &mut [T],
+) {
+    kernel.tiles_for::<Eight, 8, _, T>(Euclid, o, band, out)
+}
 
+impl<const D: usize, const N: usize> Simd<D, N> {
     /// The tile loop in lanes `L` (`K` = `L::N`) for the outputs asked for.
     #[inline(always)]
     pub(super) fn tiles_for<L: Lanes, const K: usize, M: Metric32, T: GridSample<D, N>>(
@@ -319,28 +326,38 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             Outputs::IdsAndDeltas => self.tiles::<L, K, M, T, true, true>(m, band, out),
         }
     }
+}
 
-    /// The Euclidean tile loops in eight lanes, out of line (where the
-    /// build has AVX2, or is not for x86-64).
-    #[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx2"))))]
-    #[inline(never)]
-    fn tiles_eight<T: GridSample<D, N>>(&self, o: Outputs, band: &Band<'_, D>, out: &mut [T]) {
-        self.tiles_for::<Eight, 8, Euclid, T>(Euclid, o, band, out)
-    }
+/// The Euclidean tile loops in eight lanes, out of line (where the
+/// build has AVX2, or is not for x86-64).
+#[cfg(not(all(target_arch = "x86_64", not(target_feature = "avx2"))))]
+#[inline(never)]
+fn tiles_eight<const D: usize, const N: usize, T: GridSample<D, N>>(
+    kernel: &Simd<D, N>,
+    o: Outputs,
+    band: &Band<'_, D>,
+    out: &mut [T],
+) {
+    kernel.tiles_for::<Eight, 8, Euclid, T>(Euclid, o, band, out)
+}
 
-    /// The other metrics' tile loops, eight lanes, out of line, one
-    /// instantiation for the three of them and every output set, as
-    /// `search_outputs`: whole results track IDs and deltas and write what
-    /// the outputs ask for ([`Simd::forget_unasked`]), distances alone
-    /// compute nothing else.
-    #[inline(never)]
-    fn tiles_others<T: GridSample<D, N>>(&self, m: Others, band: &Band<'_, D>, out: &mut [T]) {
-        if T::IDS_ONLY {
-            T::per_sample(self, band.grid, band.first * band.grid.size[0], out)
-        } else if T::FULL {
-            self.tiles::<Eight, 8, Others, T, true, true>(m, band, out)
-        } else {
-            self.tiles::<Eight, 8, Others, T, false, false>(m, band, out)
-        }
+/// The other metrics' tile loops, eight lanes, out of line, one
+/// instantiation for the three of them and every output set, as
+/// `search_outputs`: whole results track IDs and deltas and write what
+/// the outputs ask for ([`Simd::forget_unasked`]), distances alone
+/// compute nothing else.
+#[inline(never)]
+fn tiles_others<const D: usize, const N: usize, T: GridSample<D, N>>(
+    kernel: &Simd<D, N>,
+    m: Others,
+    band: &Band<'_, D>,
+    out: &mut [T],
+) {
+    if T::IDS_ONLY {
+        T::per_sample(kernel, band.grid, band.first * band.grid.size[0], out)
+    } else if T::FULL {
+        kernel.tiles::<Eight, 8, Others, T, true, true>(m, band, out)
+    } else {
+        kernel.tiles::<Eight, 8, Others, T, false, false>(m, band, out)
     }
 }

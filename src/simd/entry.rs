@@ -136,23 +136,43 @@ impl<const D: usize, const N: usize> Simd<D, N> {
         self.dispatch8_whole(at).0
     }
 
-    /// The whole 8-lane search ([`Simd::dispatch8_stage`]), out of line:
-    /// one copy per kernel that every eight-lane entry point calls (eight
-    /// points, periodic, in a cell, a grid's per-sample lanes, the border),
-    /// where each would otherwise compile the search into itself.
-    #[inline(never)]
+    /// [`dispatch8_whole`], for the entry points that take a kernel.
+    #[inline(always)]
     pub(super) fn dispatch8_whole(&self, at: &Located<Eight, D>) -> Stages<Eight, D, N> {
-        self.dispatch8_stage::<WHOLE>(at, Best::empty())
+        dispatch8_whole(self, at)
     }
 
-    /// The whole one-lane search, out of line for the same reason as
-    /// [`Simd::dispatch8_whole`]: one point, periodic, in a cell, the
-    /// border's one point.
-    #[inline(never)]
+    /// [`dispatch_one`], for the entry points that take a kernel.
+    #[inline(always)]
     pub(super) fn dispatch_one(&self, at: &Located<One, D>) -> Stages<One, D, N> {
-        self.dispatch_stage::<One, WHOLE>(at, Best::empty())
+        dispatch_one(self, at)
     }
+}
 
+/// The whole 8-lane search ([`Simd::dispatch8_stage`]), out of line:
+/// one copy per kernel that every eight-lane entry point calls (eight
+/// points, periodic, in a cell, a grid's per-sample lanes, the border),
+/// where each would otherwise compile the search into itself.
+#[inline(never)]
+pub(super) fn dispatch8_whole<const D: usize, const N: usize>(
+    kernel: &Simd<D, N>,
+    at: &Located<Eight, D>,
+) -> Stages<Eight, D, N> {
+    kernel.dispatch8_stage::<WHOLE>(at, Best::empty())
+}
+
+/// The whole one-lane search, out of line for the same reason as
+/// [`dispatch8_whole`]: one point, periodic, in a cell, the
+/// border's one point.
+#[inline(never)]
+pub(super) fn dispatch_one<const D: usize, const N: usize>(
+    kernel: &Simd<D, N>,
+    at: &Located<One, D>,
+) -> Stages<One, D, N> {
+    kernel.dispatch_stage::<One, WHOLE>(at, Best::empty())
+}
+
+impl<const D: usize, const N: usize> Simd<D, N> {
     /// [`Simd::dispatch8`], or one stage of the search (see [`Stages`]).
     #[inline(always)]
     pub(super) fn dispatch8_stage<const STAGE: u8>(
@@ -165,26 +185,28 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             // SAFETY: `dispatch_avx2` requires AVX2 and nothing else, and
             // `runtime_avx2` has just seen the CPU report it.
             #[allow(unsafe_code)]
-            return unsafe { self.dispatch_avx2::<STAGE>(at, start) };
+            return unsafe { dispatch_avx2::<D, N, STAGE>(self, at, start) };
         }
         self.dispatch_stage::<Eight, STAGE>(at, start)
     }
+}
 
-    /// [`Simd::dispatch_stage`] in eight lanes, compiled with AVX2 enabled: `wide`
-    /// keeps the SSE2 code it was built with, but LLVM lowers the Euclidean
-    /// kernels inlined here again, turning the scalar fallbacks inside them
-    /// (the 32-bit lane multiply above all) into AVX2 instructions. The
-    /// other metrics go through the out-of-line `search_outputs`.
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn dispatch_avx2<const STAGE: u8>(
-        &self,
-        at: &Located<Eight, D>,
-        start: Best<Eight, D, N>,
-    ) -> Stages<Eight, D, N> {
-        self.dispatch_stage::<Eight, STAGE>(at, start)
-    }
+/// [`Simd::dispatch_stage`] in eight lanes, compiled with AVX2 enabled: `wide`
+/// keeps the SSE2 code it was built with, but LLVM lowers the Euclidean
+/// kernels inlined here again, turning the scalar fallbacks inside them
+/// (the 32-bit lane multiply above all) into AVX2 instructions. The
+/// other metrics go through the out-of-line `search_outputs`.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+#[target_feature(enable = "avx2")]
+pub(super) fn dispatch_avx2<const D: usize, const N: usize, const STAGE: u8>(
+    kernel: &Simd<D, N>,
+    at: &Located<Eight, D>,
+    start: Best<Eight, D, N>,
+) -> Stages<Eight, D, N> {
+    kernel.dispatch_stage::<Eight, STAGE>(at, start)
+}
 
+impl<const D: usize, const N: usize> Simd<D, N> {
     /// Lanes per block in [`Simd::evaluate_slice`] for this kernel on this
     /// CPU: sixteen where AVX-512 is compiled in, or, for the Euclidean
     /// metric, where the CPU has it ([`runtime_avx512`]); eight otherwise.
@@ -260,7 +282,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             (None, Outputs::Distances) => self.search::<L, Euclid, false, false, STAGE>(Euclid, at, start),
             (None, Outputs::Ids) => self.search::<L, Euclid, true, false, STAGE>(Euclid, at, start),
             (None, Outputs::IdsAndDeltas) => self.search::<L, Euclid, true, true, STAGE>(Euclid, at, start),
-            (Some(m), o) if OTHERS => self.search_outputs::<L, STAGE>(m, o, at, start),
+            (Some(m), o) if OTHERS => search_outputs::<D, N, L, STAGE>(self, m, o, at, start),
             (Some(_), _) => (start, L::lt(L::f(1.0), L::f(0.0))),
         };
         let mut best = raw;
@@ -285,37 +307,37 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             }
         }
     }
+}
 
-    /// The kernels of the other metrics, kept out of line: a default
-    /// build's AVX2 copy then holds only the Euclidean kernels (see
-    /// [`Simd::dispatch_avx2`]), and the other metrics run the build's own
-    /// instructions.
-    ///
-    /// One instantiation serves the three metrics ([`Others`], chosen at
-    /// run time) and every output set: the search with IDs and deltas, then
-    /// the outputs not asked for put back to what the search without them
-    /// leaves (`start`'s, never written). The distances are the same bits:
-    /// the list holds the same N smallest ranks whether ties are ordered by
-    /// ID or not. Each instantiation of the search is a sizeable part of a
-    /// user's build, and these metrics are the rarer ones.
-    #[inline(never)]
-    pub(super) fn search_outputs<L: Lanes, const STAGE: u8>(
-        &self,
-        m: Others,
-        o: Outputs,
-        at: &Located<L, D>,
-        start: Best<L, D, N>,
-    ) -> (Best<L, D, N>, L::M) {
-        let (id, delta) = (start.id, start.delta);
-        let (mut best, open) = self.search::<L, Others, true, true, STAGE>(m, at, start);
-        if o != Outputs::IdsAndDeltas {
-            best.delta = delta;
-        }
-        if o == Outputs::Distances {
-            best.id = id;
-        }
-        (best, open)
+/// The kernels of the other metrics, kept out of line: a default
+/// build's AVX2 copy then holds only the Euclidean kernels (see
+/// [`dispatch_avx2`]), and the other metrics run the build's own
+/// instructions.
+///
+/// One instantiation serves the three metrics ([`Others`], chosen at
+/// run time) and every output set: the search with IDs and deltas, then
+/// the outputs not asked for put back to what the search without them
+/// leaves (`start`'s, never written). The distances are the same bits:
+/// the list holds the same N smallest ranks whether ties are ordered by
+/// ID or not. Each instantiation of the search is a sizeable part of a
+/// user's build, and these metrics are the rarer ones.
+#[inline(never)]
+pub(super) fn search_outputs<const D: usize, const N: usize, L: Lanes, const STAGE: u8>(
+    kernel: &Simd<D, N>,
+    m: Others,
+    o: Outputs,
+    at: &Located<L, D>,
+    start: Best<L, D, N>,
+) -> (Best<L, D, N>, L::M) {
+    let (id, delta) = (start.id, start.delta);
+    let (mut best, open) = kernel.search::<L, Others, true, true, STAGE>(m, at, start);
+    if o != Outputs::IdsAndDeltas {
+        best.delta = delta;
     }
+    if o == Outputs::Distances {
+        best.id = id;
+    }
+    (best, open)
 }
 
 impl<const N: usize> Simd<2, N> {
@@ -408,7 +430,7 @@ mod runtime_avx2_tests {
                 let plain = kernel.dispatch_stage::<Eight, WHOLE>(&located, Best::empty()).0;
                 // SAFETY: `runtime_avx2` returned true above.
                 #[allow(unsafe_code)]
-                let avx2 = unsafe { kernel.dispatch_avx2::<WHOLE>(&located, Best::empty()).0 };
+                let avx2 = unsafe { dispatch_avx2::<D, N, WHOLE>(&kernel, &located, Best::empty()).0 };
                 for k in 0..N {
                     let what = format!("{outputs:?} F{} at batch {batch}", k + 1);
                     let bits = |v: f32x8| v.to_array().map(f32::to_bits);

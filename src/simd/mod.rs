@@ -98,6 +98,17 @@
 //! | `border.rs`, `border/search.rs`, `border/tiles.rs` | the distance to the cell's border, its per-sample search and its grid tiles |
 //! | `border/nsphere.rs`, `border/smooth.rs`, `border/smooth/near.rs` | the n-sphere radius; compact smooth F1 and its search for the points within reach |
 //!
+//! The functions a kernel is compiled into, the `#[inline(never)]` and
+//! `#[target_feature]` ones that the `#[inline(always)]` parts inline into
+//! (`widen`, `tile_per_sample`, `dispatch_avx2`, `tiles_others`, …), are
+//! free functions of the file that holds them, taking the kernel as their
+//! first argument, not methods of [`Simd`]. rustc compiles a method in the
+//! codegen unit of its type's module, and LLVM optimises a codegen unit on
+//! one thread: as methods they were one unit, four fifths of the machine
+//! code of a crate that instantiates kernels, and a build optimised it on
+//! one core while the other idled (docs/measurements.md, "One codegen unit
+//! per part").
+//!
 //! ## Build flags
 //! `wide` chooses its instructions at compile time only. Build with
 //! `RUSTFLAGS="-C target-cpu=native"` (or `x86-64-v3`) for the AVX2 path;

@@ -125,67 +125,69 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             let open =
                 may_enter::<L, IDS>(metric.rank_of_distance::<L>(outside::<L, D>(&at.f, UNIT)), best.rank[N - 1]);
             if L::any(open) {
-                self.widen::<L, M, IDS, DELTAS>(metric, at, open, &mut best);
+                widen::<D, N, L, M, IDS, DELTAS>(self, metric, at, open, &mut best);
             }
         }
         // Every lane is final: no lane is open.
         (best, L::lt(one, L::f(0.0)))
     }
+}
 
-    /// The whole search in one lane, as ranks in lane units (no distances,
-    /// no bad lanes marked), out of line: the coherent paths' lanes left
-    /// uncertified take it, and one copy serves every lane set's tiles.
-    #[inline(never)]
-    pub(super) fn search_one<M: Metric32, const IDS: bool, const DELTAS: bool>(
-        &self,
-        metric: M,
-        at: &Located<One, D>,
-    ) -> Best<One, D, N> {
-        self.search::<One, M, IDS, DELTAS, WHOLE>(metric, at, Best::empty()).0
-    }
+/// The whole search in one lane, as ranks in lane units (no distances,
+/// no bad lanes marked), out of line: the coherent paths' lanes left
+/// uncertified take it, and one copy serves every lane set's tiles.
+#[inline(never)]
+pub(super) fn search_one<const D: usize, const N: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
+    kernel: &Simd<D, N>,
+    metric: M,
+    at: &Located<One, D>,
+) -> Best<One, D, N> {
+    kernel.search::<One, M, IDS, DELTAS, WHOLE>(metric, at, Best::empty()).0
+}
 
-    /// The cold path: shells of radius 2, 3, … for the lanes in `open`.
-    #[inline(never)]
-    pub(super) fn widen<L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool>(
-        &self,
-        metric: M,
-        at: &Located<L, D>,
-        mut open: L::M,
-        best: &mut Best<L, D, N>,
-    ) {
-        let cell = at.cells_i64();
-        for r in 2..=MAX_SHELLS {
-            for offset in shell::<D>(r) {
-                let t: [L::U; D] = per_axis(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
-                let gaps: [L::F; D] = per_axis(|a| {
-                    let o = offset[a];
-                    if o > 0 {
-                        L::sub(L::f(o as f32 * UNIT), at.f[a])
-                    } else if o < 0 {
-                        L::sub(at.f[a], L::f((o + 1) as f32 * UNIT))
-                    } else {
-                        L::f(0.0)
-                    }
-                });
-                let needs = L::and(open, may_enter::<L, IDS>(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
-                if L::any(needs) {
-                    let sh: [L::F; D] = per_axis(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
-                    self.visit::<L, M, IDS, DELTAS>(metric, self.hash::<L>(t), sh, needs, best);
+/// The cold path: shells of radius 2, 3, … for the lanes in `open`.
+#[inline(never)]
+pub(super) fn widen<const D: usize, const N: usize, L: Lanes, M: Metric32, const IDS: bool, const DELTAS: bool>(
+    kernel: &Simd<D, N>,
+    metric: M,
+    at: &Located<L, D>,
+    mut open: L::M,
+    best: &mut Best<L, D, N>,
+) {
+    let cell = at.cells_i64();
+    for r in 2..=MAX_SHELLS {
+        for offset in shell::<D>(r) {
+            let t: [L::U; D] = per_axis(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
+            let gaps: [L::F; D] = per_axis(|a| {
+                let o = offset[a];
+                if o > 0 {
+                    L::sub(L::f(o as f32 * UNIT), at.f[a])
+                } else if o < 0 {
+                    L::sub(at.f[a], L::f((o + 1) as f32 * UNIT))
+                } else {
+                    L::f(0.0)
                 }
-            }
-            let edge = metric.rank_of_distance::<L>(outside::<L, D>(&at.f, r as f32 * UNIT));
-            open = L::and(open, may_enter::<L, IDS>(edge, best.rank[N - 1]));
-            if !L::any(open) {
-                return;
+            });
+            let needs = L::and(open, may_enter::<L, IDS>(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
+            if L::any(needs) {
+                let sh: [L::F; D] = per_axis(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
+                kernel.visit::<L, M, IDS, DELTAS>(metric, kernel.hash::<L>(t), sh, needs, best);
             }
         }
-        // Uncertified after MAX_SHELLS (never seen for valid configurations):
-        // NaN rather than a possibly wrong value.
-        for k in 0..N {
-            best.rank[k] = L::select(open, L::f(f32::NAN), best.rank[k]);
+        let edge = metric.rank_of_distance::<L>(outside::<L, D>(&at.f, r as f32 * UNIT));
+        open = L::and(open, may_enter::<L, IDS>(edge, best.rank[N - 1]));
+        if !L::any(open) {
+            return;
         }
     }
+    // Uncertified after MAX_SHELLS (never seen for valid configurations):
+    // NaN rather than a possibly wrong value.
+    for k in 0..N {
+        best.rank[k] = L::select(open, L::f(f32::NAN), best.rank[k]);
+    }
+}
 
+impl<const D: usize, const N: usize> Simd<D, N> {
     /// Visits one cell for the lanes in `needs`: `h` is its hash, `shifted`
     /// the sample minus the cell's corner, per lane.
     #[inline(always)]

@@ -8,6 +8,7 @@ use super::lanes::{Lanes, One, WIDEST};
 use super::locate::Located;
 use super::metric::distance_of_rank;
 use super::region::{next_cell, Region};
+use super::search::search_one;
 use super::tiles::{
     inflate, lanes_from, lanes_of, largest, load, point_gap, AxisCell, CellRow, Spill, Tile, SLACK_ABS, SLACK_REL,
 };
@@ -51,7 +52,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
                 b.rank = l.rank;
             }
             if let Some(certified) = open {
-                self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
+                tile_per_sample::<D, N, L, K, M, IDS, DELTAS>(self, metric, t, best, certified)
             }
             return;
         }
@@ -59,7 +60,7 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             b.reset::<IDS, DELTAS>();
         }
         if let Some(certified) = self.tile_search::<L, K, M, IDS, DELTAS>(metric, region, t, (rows, near), best) {
-            self.tile_per_sample::<L, K, M, IDS, DELTAS>(metric, t, best, certified)
+            tile_per_sample::<D, N, L, K, M, IDS, DELTAS>(self, metric, t, best, certified)
         }
     }
 
@@ -292,55 +293,62 @@ impl<const D: usize, const N: usize> Simd<D, N> {
             }
         }
     }
+}
 
-    /// The lanes of a tile not set in `certified`, by the per-sample kernel.
-    #[cold]
-    #[inline(never)]
-    pub(super) fn tile_per_sample<L: Lanes, const K: usize, M: Metric32, const IDS: bool, const DELTAS: bool>(
-        &self,
-        metric: M,
-        t: &Tile<L, D>,
-        best: &mut [Best<L, D, N>; K],
-        certified: [u32; K],
-    ) {
-        let (x_f, x_cl) = (lanes_of::<L>(t.x_f), lanes_of::<L>(t.x_cl));
-        let row_f: [[f32; WIDEST]; D] = per_axis(|a| lanes_of::<L>(t.row_f[a]));
-        let row_cl: [[f32; WIDEST]; D] = per_axis(|a| lanes_of::<L>(t.row_cl[a]));
-        for (k, b) in best.iter_mut().enumerate() {
-            let mut rank: [[f32; WIDEST]; N] = per_axis(|j| lanes_of::<L>(b.rank[j]));
-            let mut id = [[0u32; WIDEST]; N];
-            for (j, lanes) in id.iter_mut().enumerate() {
-                L::u_store(b.id[j], &mut lanes[..L::N]);
-            }
-            let mut delta: [[[f32; WIDEST]; D]; N] = per_axis(|j| per_axis(|a| lanes_of::<L>(b.delta[j][a])));
-            for i in (0..L::N).filter(|i| certified[k] & (1 << i) == 0) {
-                let (f, cl) = (
-                    |a: usize| if a == 0 { x_f[i] } else { row_f[a][k] },
-                    |a: usize| {
-                        if a == 0 {
-                            x_cl[i]
-                        } else {
-                            row_cl[a][k]
-                        }
-                    },
-                );
-                let cell: [[i64; WIDEST]; D] =
-                    std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; WIDEST]);
-                let fr: [[f32; WIDEST]; D] = std::array::from_fn(|a| [f(a); WIDEST]);
-                let at = Located::<One, D>::lanewise(cell, &fr, [true; WIDEST]);
-                let one = self.search_one::<M, IDS, DELTAS>(metric, &at);
-                for j in 0..N {
-                    rank[j][i] = one.rank[j];
-                    id[j][i] = one.id[j];
-                    for (lanes, v) in delta[j].iter_mut().zip(one.delta[j]) {
-                        lanes[i] = v;
+/// The lanes of a tile not set in `certified`, by the per-sample kernel.
+#[cold]
+#[inline(never)]
+pub(super) fn tile_per_sample<
+    const D: usize,
+    const N: usize,
+    L: Lanes,
+    const K: usize,
+    M: Metric32,
+    const IDS: bool,
+    const DELTAS: bool,
+>(
+    kernel: &Simd<D, N>,
+    metric: M,
+    t: &Tile<L, D>,
+    best: &mut [Best<L, D, N>; K],
+    certified: [u32; K],
+) {
+    let (x_f, x_cl) = (lanes_of::<L>(t.x_f), lanes_of::<L>(t.x_cl));
+    let row_f: [[f32; WIDEST]; D] = per_axis(|a| lanes_of::<L>(t.row_f[a]));
+    let row_cl: [[f32; WIDEST]; D] = per_axis(|a| lanes_of::<L>(t.row_cl[a]));
+    for (k, b) in best.iter_mut().enumerate() {
+        let mut rank: [[f32; WIDEST]; N] = per_axis(|j| lanes_of::<L>(b.rank[j]));
+        let mut id = [[0u32; WIDEST]; N];
+        for (j, lanes) in id.iter_mut().enumerate() {
+            L::u_store(b.id[j], &mut lanes[..L::N]);
+        }
+        let mut delta: [[[f32; WIDEST]; D]; N] = per_axis(|j| per_axis(|a| lanes_of::<L>(b.delta[j][a])));
+        for i in (0..L::N).filter(|i| certified[k] & (1 << i) == 0) {
+            let (f, cl) = (
+                |a: usize| if a == 0 { x_f[i] } else { row_f[a][k] },
+                |a: usize| {
+                    if a == 0 {
+                        x_cl[i]
+                    } else {
+                        row_cl[a][k]
                     }
+                },
+            );
+            let cell: [[i64; WIDEST]; D] = std::array::from_fn(|a| [t.reference[a] + (cl(a) / UNIT) as i64; WIDEST]);
+            let fr: [[f32; WIDEST]; D] = std::array::from_fn(|a| [f(a); WIDEST]);
+            let at = Located::<One, D>::lanewise(cell, &fr, [true; WIDEST]);
+            let one = search_one::<D, N, M, IDS, DELTAS>(kernel, metric, &at);
+            for j in 0..N {
+                rank[j][i] = one.rank[j];
+                id[j][i] = one.id[j];
+                for (lanes, v) in delta[j].iter_mut().zip(one.delta[j]) {
+                    lanes[i] = v;
                 }
             }
-            b.rank = per_axis(|j| lanes_from::<L>(&rank[j]));
-            b.id = per_axis(|j| L::u_load(&id[j][..L::N]));
-            b.delta = per_axis(|j| per_axis(|a| lanes_from::<L>(&delta[j][a])));
         }
+        b.rank = per_axis(|j| lanes_from::<L>(&rank[j]));
+        b.id = per_axis(|j| L::u_load(&id[j][..L::N]));
+        b.delta = per_axis(|j| per_axis(|a| lanes_from::<L>(&delta[j][a])));
     }
 }
 

@@ -42,25 +42,27 @@ impl<const D: usize> Simd<D, 1> {
             // SAFETY: `border_search_avx2` requires AVX2 and nothing else,
             // and `runtime_avx2` has just seen the CPU report it.
             #[allow(unsafe_code)]
-            return unsafe { self.border_search_avx2(at, nearest) };
+            return unsafe { border_search_avx2(self, at, nearest) };
         }
         self.border_search::<Eight>(at, nearest)
     }
+}
 
-    /// [`Simd::border_search`] compiled with AVX2 enabled (see
-    /// [`Simd::dispatch_avx2`]): in a default build `wide`'s 32-bit lane
-    /// multiply of the point generator is a scalar fallback, which LLVM
-    /// lowers to one instruction here.
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-    #[target_feature(enable = "avx2")]
-    pub(super) fn border_search_avx2(
-        &self,
-        at: &Located<Eight, D>,
-        nearest: &Best<Eight, D, 1>,
-    ) -> (Plane<Eight, D>, f32x8) {
-        self.border_search::<Eight>(at, nearest)
-    }
+/// [`Simd::border_search`] compiled with AVX2 enabled (see
+/// [`dispatch_avx2`](super::super::entry::dispatch_avx2)): in a default build `wide`'s 32-bit lane
+/// multiply of the point generator is a scalar fallback, which LLVM
+/// lowers to one instruction here.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+#[target_feature(enable = "avx2")]
+pub(super) fn border_search_avx2<const D: usize>(
+    kernel: &Simd<D, 1>,
+    at: &Located<Eight, D>,
+    nearest: &Best<Eight, D, 1>,
+) -> (Plane<Eight, D>, f32x8) {
+    kernel.border_search::<Eight>(at, nearest)
+}
 
+impl<const D: usize> Simd<D, 1> {
     /// The nearest bisector plane between F1's point (`nearest`, as the
     /// kernel holds it: squared rank and delta in lane units) and any other
     /// point, per lane; lanes whose F1's point was not met again are left

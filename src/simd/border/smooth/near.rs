@@ -90,19 +90,26 @@ impl<const D: usize> Simd<D, 1> {
             // SAFETY: `near_points_avx2` requires AVX2 and nothing else,
             // and `runtime_avx2` has just seen the CPU report it.
             #[allow(unsafe_code)]
-            return unsafe { self.near_points_avx2(at, reach, near) };
+            return unsafe { near_points_avx2(self, at, reach, near) };
         }
         self.near_points::<Eight, _>(at, reach, near)
     }
+}
 
-    /// [`Simd::near_points`] compiled with AVX2 enabled (see
-    /// [`Simd::dispatch_avx2`]).
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-    #[target_feature(enable = "avx2")]
-    fn near_points_avx2(&self, at: &Located<Eight, D>, reach: f32x8, near: &mut Near<D>) -> u32 {
-        self.near_points::<Eight, _>(at, reach, near)
-    }
+/// [`Simd::near_points`] compiled with AVX2 enabled (see
+/// [`dispatch_avx2`](super::super::super::entry::dispatch_avx2)).
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+#[target_feature(enable = "avx2")]
+fn near_points_avx2<const D: usize>(
+    kernel: &Simd<D, 1>,
+    at: &Located<Eight, D>,
+    reach: f32x8,
+    near: &mut Near<D>,
+) -> u32 {
+    kernel.near_points::<Eight, _>(at, reach, near)
+}
 
+impl<const D: usize> Simd<D, 1> {
     /// Every point nearer than `reach` (squared, lane units; negative for
     /// lanes left out) per lane, into `near`; returns the bit mask of lanes
     /// whose reach passed [`MAX_SHELLS`] (never seen for valid input: their
