@@ -17,39 +17,66 @@ const TARGETS: [(&str, Check); 6] = [
     ("filtered", fuzz::filtered),
 ];
 
-#[test]
-fn kept_fuzz_inputs_replay_cleanly() {
+/// Every input kept for `target`: the named files in its folder, where it
+/// has one, then its minimised corpus, which every target has. One test per
+/// target, so that the test threads share the replays.
+fn replay(target: &str, check: Check) {
     let mut replayed = 0;
-    for (target, check) in TARGETS {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions").join(target);
-        // Named inputs where a target has a folder of them.
-        for entry in std::fs::read_dir(&dir).into_iter().flatten() {
-            let path = entry.unwrap().path();
-            if path.is_file() && path.extension().is_none_or(|e| e != "md") {
-                let data = std::fs::read(&path).unwrap();
-                if std::panic::catch_unwind(|| check(&data)).is_err() {
-                    panic!("{target}: {} fails", path.display());
-                }
-                replayed += 1;
-            }
-        }
-        // Every target has its minimised corpus.
-        let hex = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("fuzz/regressions/{target}.hex"));
-        let text = std::fs::read_to_string(&hex).unwrap_or_else(|e| panic!("{}: {e}", hex.display()));
-        assert!(text.lines().count() > 0, "{}: no inputs", hex.display());
-        for (line, input) in text.lines().enumerate() {
-            let data: Vec<u8> = (0..input.len() / 2)
-                .map(|i| u8::from_str_radix(&input[2 * i..2 * i + 2], 16).expect("hex digits"))
-                .collect();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions").join(target);
+    for entry in std::fs::read_dir(&dir).into_iter().flatten() {
+        let path = entry.unwrap().path();
+        if path.is_file() && path.extension().is_none_or(|e| e != "md") {
+            let data = std::fs::read(&path).unwrap();
             if std::panic::catch_unwind(|| check(&data)).is_err() {
-                panic!("{target}: line {} of {} fails", line + 1, hex.display());
+                panic!("{target}: {} fails", path.display());
             }
             replayed += 1;
         }
     }
-    assert!(replayed > TARGETS.len(), "only {replayed} kept fuzz inputs found under fuzz/regressions");
-    println!("replayed {replayed} kept inputs");
+    let hex = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("fuzz/regressions/{target}.hex"));
+    let text = std::fs::read_to_string(&hex).unwrap_or_else(|e| panic!("{}: {e}", hex.display()));
+    assert!(text.lines().count() > 0, "{}: no inputs", hex.display());
+    for (line, input) in text.lines().enumerate() {
+        let data: Vec<u8> = (0..input.len() / 2)
+            .map(|i| u8::from_str_radix(&input[2 * i..2 * i + 2], 16).expect("hex digits"))
+            .collect();
+        if std::panic::catch_unwind(|| check(&data)).is_err() {
+            panic!("{target}: line {} of {} fails", line + 1, hex.display());
+        }
+        replayed += 1;
+    }
+    println!("{target}: replayed {replayed} kept inputs");
 }
+
+/// One test per fuzz target replaying its kept inputs.
+macro_rules! kept_inputs {
+    ($($test:ident: $target:literal),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                let (_, check) = TARGETS.iter().find(|(t, _)| *t == $target).expect("a target of TARGETS");
+                replay($target, *check);
+            }
+        )*
+        /// Every target of [`TARGETS`] has its test above.
+        #[test]
+        fn every_target_replays_its_kept_inputs() {
+            let tested = [$($target),*];
+            for (target, _) in TARGETS {
+                assert!(tested.contains(&target), "{target} has no replay test");
+            }
+        }
+    };
+}
+
+kept_inputs!(
+    kept_differential_inputs_replay_cleanly: "differential",
+    kept_continuity_inputs_replay_cleanly: "continuity",
+    kept_bad_input_inputs_replay_cleanly: "bad_input",
+    kept_config_inputs_replay_cleanly: "config",
+    kept_border_inputs_replay_cleanly: "border",
+    kept_filtered_inputs_replay_cleanly: "filtered",
+);
 
 /// 3000 seeded byte strings per target in the whole campaign.
 fn seeded(tier: Tier) {
