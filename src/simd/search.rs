@@ -158,16 +158,7 @@ pub(super) fn widen<const D: usize, const N: usize, L: Lanes, M: Metric32, const
     for r in 2..=MAX_SHELLS {
         for offset in shell::<D>(r) {
             let t: [L::U; D] = per_axis(|a| words::<L>(a, &cell[a], offset[a], at.period.map(|p| p[a])));
-            let gaps: [L::F; D] = per_axis(|a| {
-                let o = offset[a];
-                if o > 0 {
-                    L::sub(L::f(o as f32 * UNIT), at.f[a])
-                } else if o < 0 {
-                    L::sub(at.f[a], L::f((o + 1) as f32 * UNIT))
-                } else {
-                    L::f(0.0)
-                }
-            });
+            let gaps = far_gaps::<L, D>(&at.f, &offset);
             let needs = L::and(open, may_enter::<L, IDS>(metric.rank::<L, D>(&gaps), best.rank[N - 1]));
             if L::any(needs) {
                 let sh: [L::F; D] = per_axis(|a| L::sub(at.f[a], L::f(offset[a] as f32 * UNIT)));
@@ -236,6 +227,24 @@ pub(super) fn may_enter<L: Lanes, const IDS: bool>(bound: L::F, last: L::F) -> L
     } else {
         L::lt(bound, last)
     }
+}
+
+/// Per axis, the gap between the sample (its fraction `f` of its cell, per
+/// lane) and the cell at `offset` from its own, in lane units: zero on an
+/// axis where the offset is zero. The widening's test of a cell, and the
+/// border's, which must visit the cells the widening visits.
+#[inline(always)]
+pub(super) fn far_gaps<L: Lanes, const D: usize>(f: &[L::F; D], offset: &[i64; D]) -> [L::F; D] {
+    per_axis(|a| {
+        let o = offset[a];
+        if o > 0 {
+            L::sub(L::f(o as f32 * UNIT), f[a])
+        } else if o < 0 {
+            L::sub(f[a], L::f((o + 1) as f32 * UNIT))
+        } else {
+            L::f(0.0)
+        }
+    })
 }
 
 /// B_r per lane: distance from the sample to the outside of the block of

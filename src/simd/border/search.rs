@@ -9,7 +9,7 @@ use super::super::best::Best;
 use super::super::generate::{words, UNIT};
 use super::super::lanes::{Eight, Lanes, WIDEST};
 use super::super::locate::Located;
-use super::super::search::outside;
+use super::super::search::{far_gaps, outside};
 use super::super::{per_axis, Simd};
 use super::{Plane, SLACK};
 use crate::config::Mode;
@@ -334,16 +334,7 @@ impl<L: Lanes, const D: usize> Frame<L, D> {
     /// 3^d block, as the kernel's widening computes it.
     #[inline(always)]
     pub(super) fn far_cell(at: &Located<L, D>, cell: &[[i64; WIDEST]; D], offset: &[i64; D]) -> CellAt<L, D> {
-        let gaps: [L::F; D] = per_axis(|a| {
-            let o = offset[a];
-            if o > 0 {
-                L::sub(L::f(o as f32 * UNIT), at.f[a])
-            } else if o < 0 {
-                L::sub(at.f[a], L::f((o + 1) as f32 * UNIT))
-            } else {
-                L::f(0.0)
-            }
-        });
+        let gaps = far_gaps::<L, D>(&at.f, offset);
         let mut rank = L::mul(gaps[0], gaps[0]);
         for g in &gaps[1..] {
             rank = L::add(rank, L::mul(*g, *g));
