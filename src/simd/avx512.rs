@@ -59,7 +59,8 @@ use std::cell::Cell;
 /// Sixteen lanes in one AVX-512 register each, masks in a mask register.
 /// Every operation is the IEEE operation [`One`](super::lanes::One) does,
 /// lane by lane, so a lane's bits are the one-lane kernel's (tested against
-/// it in `tests` below and through `evaluate_slice` in `tests/lanes/simd.rs`).
+/// it in `tests` below, and through `evaluate_slice` in `tests/lanes/simd.rs`
+/// and at each ceiling in `tests/lanes/levels.rs`).
 #[derive(Clone, Copy, Debug)]
 struct Avx512;
 
@@ -324,9 +325,7 @@ pub(super) fn tiles<const D: usize, const N: usize, T: GridSample<D, N>>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{Config, Mode};
-    use crate::simd::lanes::{Eight, One};
-    use crate::simd::{sample_point, Outputs};
+    use crate::simd::lanes::One;
 
     /// Every operation of the AVX-512 lanes gives, lane by lane, the bits of
     /// the one-lane operation, on special and random values (signed zeros,
@@ -466,57 +465,5 @@ mod tests {
         assert_eq!(L::any(m), (0..16).any(|l| One::lt(fa[l], fb[l])));
         assert_eq!(L::bits(L::and(m, L::le(a, b))), L::bits(m));
         assert_eq!(L::bits(L::or(m, L::eq(a, b))), L::bits(L::le(a, b)));
-    }
-
-    /// A slice through the run-time sixteen lanes, through the eight lanes
-    /// a default build falls back to on a CPU without AVX-512, and point by
-    /// point through the one-lane kernel: the same bits, bad points
-    /// included.
-    fn same<const D: usize, const N: usize>(config: Config) {
-        if !runtime_avx512() {
-            eprintln!("this CPU lacks AVX-512: the run-time sixteen lanes are not tested here");
-            return;
-        }
-        for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
-            let kernel = Simd::<D, N>::new(config, outputs).unwrap();
-            // Ordinary points, points beyond 2^31 cells (the lane-wise
-            // locate), and NaN, infinite and out-of-range coordinates.
-            let mut points: Vec<[f64; D]> =
-                (0..3001).map(|i| sample_point(17, i, if i % 5 == 0 { 3.0e10 } else { 40.0 })).collect();
-            for (i, bad) in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1.0e300].into_iter().enumerate() {
-                points[97 * i + 5][i % D] = bad;
-            }
-            let empty = Features32 { distance: [0.0; N], delta: [[0.0; D]; N], id: [0; N] };
-            let (mut sixteen, mut eight) = (vec![empty; points.len()], vec![empty; points.len()]);
-            assert!(evaluate_slice(&kernel, &points, &mut sixteen));
-            kernel.slice_in_stages::<Eight, _>(
-                &points,
-                &mut eight,
-                |at, start| kernel.dispatch8_stage::<FIRST>(at, start),
-                |at, start| kernel.dispatch8_stage::<REST>(at, start),
-            );
-            for (i, p) in points.iter().enumerate() {
-                let one = kernel.evaluate(*p);
-                for (name, got) in [("sixteen", &sixteen[i]), ("eight", &eight[i])] {
-                    let what = format!("{outputs:?}, {name} lanes, point {i} {p:?}");
-                    let bits = |f: &Features32<D, N>| {
-                        (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id)
-                    };
-                    assert_eq!(bits(got), bits(&one), "{what}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn slices_in_run_time_sixteen_lanes_give_the_eight_and_one_lane_bits() {
-        same::<2, 3>(Config { order: 3, ..Config::default() });
-        same::<3, 1>(Config::default());
-        same::<3, 2>(Config { order: 2, ..Config::default() });
-        same::<3, 4>(Config { order: 4, ..Config::default() });
-        same::<4, 2>(Config { order: 2, ..Config::default() });
-        same::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
-        same::<3, 2>(Config { order: 2, mode: Mode::Window, ..Config::default() });
-        same::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
     }
 }

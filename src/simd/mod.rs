@@ -123,7 +123,8 @@
 //! becomes `vpmulld`, and VEX encodings drop register copies. Calling that
 //! function is one of the crate's two fenced `unsafe` operations, behind the
 //! CPU check; it took the default build's 3D F1 from 7.9 to 10.8 M
-//! samples/s on random points (one thread). A unit test keeps the two copies bit for bit equal.
+//! samples/s on random points (one thread). `tests/lanes/levels.rs` keeps the two copies bit for bit
+//! equal.
 //! The other metrics' kernels stay out of the copy and run the build's own
 //! instructions: copying all twelve kernels (four metrics, three output
 //! choices) doubled the optimised build of the crate, and the Euclidean
@@ -250,25 +251,4 @@ pub struct Simd<const D: usize, const N: usize> {
     /// How many leading cells of `block` have no far axis.
     near: usize,
     inv_scale: f32,
-}
-
-/// Point i of a seeded set, uniform in [−range, range]^D, for the tests of
-/// the run-time copies (`runtime_avx2_tests`, `avx512::tests`,
-/// `border::runtime_avx2_tests`).
-#[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx512f")))]
-pub(super) fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
-    std::array::from_fn(|a| (2.0 * crate::math::uniform(seed, (i * D + a) as u64) - 1.0) * range)
-}
-
-/// Batch `batch` of eight points for the tests of the run-time AVX2
-/// copies: ordinary points, points beyond 2^31 cells in some lanes (the
-/// lane-wise locate) and, in every seventh batch, a NaN lane among good ones.
-#[cfg(all(test, target_arch = "x86_64", not(target_feature = "avx2")))]
-pub(super) fn test_batch<const D: usize>(seed: u64, batch: usize) -> [[f64; D]; 8] {
-    let range = [40.0, 3.0e10][batch % 2];
-    let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(seed, batch * 8 + i, range));
-    if batch.is_multiple_of(7) {
-        points[batch % 8][0] = f64::NAN;
-    }
-    points
 }

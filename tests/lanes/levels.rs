@@ -4,11 +4,27 @@
 //! run eight AVX2 lanes or sixteen AVX-512 lanes chosen at run time; in a
 //! default build SSE2, the AVX2 copies or the AVX-512 lanes. The ceiling is
 //! global: the other tests of this binary only ever assert results that
-//! every path gives alike.
+//! every path gives alike, and the tests here that set it take [`CAP`]
+//! first, so each runs its levels in turn without another changing them.
+//!
+//! These tests go through the public entry points only, so they compile
+//! against the kernels the rest of the binary (and, in the default build,
+//! the harness) already instantiates, and not into the library's own unit
+//! tests, which cannot share them.
 
+use std::sync::Mutex;
 use worley::math::uniform;
 use worley::simd::{lane, runtime_avx2, runtime_avx512, set_simd_cap, simd_cap, simd_level, SimdCap};
 use worley::{Config, Features32, Grid, Metric, Outputs, Simd};
+
+/// Held by every test that sets the ceiling.
+static CAP: Mutex<()> = Mutex::new(());
+
+/// Point i of a seeded set, uniform in [−range, range]^D.
+#[cfg(not(target_feature = "avx512f"))]
+fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
+    std::array::from_fn(|a| (2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * range)
+}
 
 fn bits<const D: usize, const N: usize>(v: &[Features32<D, N>]) -> Vec<u32> {
     v.iter()
@@ -24,6 +40,7 @@ fn bits<const D: usize, const N: usize>(v: &[Features32<D, N>]) -> Vec<u32> {
 /// the lowest one, and the ceiling decides the run-time choices.
 #[test]
 fn every_ceiling_gives_the_same_bits() {
+    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
     let before = set_simd_cap(SimdCap::Sse2);
     assert!(!runtime_avx2() && !runtime_avx512(), "no run-time choice under an SSE2 ceiling");
     let points: Vec<[f64; 3]> =
@@ -53,5 +70,146 @@ fn every_ceiling_gives_the_same_bits() {
         assert_eq!(simd_cap(), cap);
         assert!(metrics.map(run) == lowest, "{cap:?} ({}) differs from SSE2", simd_level());
     }
+    set_simd_cap(before);
+}
+
+/// A slice at each ceiling (sixteen AVX-512 lanes chosen at run time where
+/// the CPU has them, the AVX2 copy of the eight lanes, `wide`'s own eight)
+/// and point by point through the one-lane kernel: the same bits, on
+/// ordinary points, points beyond 2^31 cells (the lane-wise locate) and
+/// NaN, infinite and out-of-range coordinates. A build with AVX-512
+/// compiled in has one path only, tested by the rest of this binary.
+#[cfg(not(target_feature = "avx512f"))]
+fn slices_at_each_ceiling<const D: usize, const N: usize>(config: Config) {
+    let mut points: Vec<[f64; D]> =
+        (0..3001).map(|i| sample_point(17, i, if i % 5 == 0 { 3.0e10 } else { 40.0 })).collect();
+    for (i, bad) in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1.0e300].into_iter().enumerate() {
+        points[97 * i + 5][i % D] = bad;
+    }
+    let bits = |f: &Features32<D, N>| (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id);
+    for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
+        let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+        let one: Vec<_> = points.iter().map(|p| kernel.evaluate(*p)).collect();
+        for cap in [SimdCap::Sse2, SimdCap::Avx2, SimdCap::Avx512] {
+            set_simd_cap(cap);
+            let mut slice = vec![one[0]; points.len()];
+            kernel.evaluate_slice(&points, &mut slice).unwrap();
+            for (i, p) in points.iter().enumerate() {
+                assert_eq!(bits(&slice[i]), bits(&one[i]), "{D}D F{N} {outputs:?} under {cap:?}, point {i} {p:?}");
+            }
+        }
+    }
+}
+
+#[test]
+#[cfg(not(target_feature = "avx512f"))]
+fn slices_give_the_one_point_bits_at_every_ceiling() {
+    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
+    let before = set_simd_cap(SimdCap::Avx512);
+    if !runtime_avx512() {
+        eprintln!("this CPU lacks AVX-512: the run-time sixteen lanes are not tested here");
+    }
+    slices_at_each_ceiling::<2, 3>(Config { order: 3, ..Config::default() });
+    slices_at_each_ceiling::<3, 1>(Config::default());
+    slices_at_each_ceiling::<3, 2>(Config { order: 2, ..Config::default() });
+    slices_at_each_ceiling::<3, 4>(Config { order: 4, ..Config::default() });
+    slices_at_each_ceiling::<4, 2>(Config { order: 2, ..Config::default() });
+    slices_at_each_ceiling::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
+    slices_at_each_ceiling::<3, 2>(Config { order: 2, mode: worley::Mode::Window, ..Config::default() });
+    slices_at_each_ceiling::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
+    set_simd_cap(before);
+}
+
+/// Batch `batch` of eight points: ordinary points in even batches, points
+/// beyond 2^31 cells (the lane-wise locate) in odd ones, and in every
+/// seventh a NaN lane among good ones.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+fn eight_points<const D: usize>(seed: u64, batch: usize) -> [[f64; D]; 8] {
+    let range = [40.0, 3.0e10][batch % 2];
+    let mut points: [[f64; D]; 8] = std::array::from_fn(|i| sample_point(seed, batch * 8 + i, range));
+    if batch.is_multiple_of(7) {
+        points[batch % 8][0] = f64::NAN;
+    }
+    points
+}
+
+/// Eight-lane calls of a default build with and without the kernel's AVX2
+/// recompilation, on the batches of [`eight_points`]. An AVX2 build has no
+/// second copy.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+fn eights_with_and_without_avx2<const D: usize, const N: usize>(config: Config) {
+    let bits = |f: &Features32<D, N>| (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id);
+    for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
+        let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+        for batch in 0..1500 {
+            let points = eight_points::<D>(11, batch);
+            set_simd_cap(SimdCap::Sse2);
+            let plain = kernel.evaluate8(&points);
+            set_simd_cap(SimdCap::Avx2);
+            let avx2 = kernel.evaluate8(&points);
+            for i in 0..8 {
+                let what = format!("{D}D F{N} {outputs:?}, batch {batch} lane {i}");
+                assert_eq!(bits(&lane(&plain, i)), bits(&lane(&avx2, i)), "{what}");
+            }
+        }
+    }
+}
+
+#[test]
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+fn the_avx2_recompilation_gives_the_sse2_bits() {
+    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
+    let before = set_simd_cap(SimdCap::Avx2);
+    if !runtime_avx2() {
+        eprintln!("this CPU has no AVX2: only the SSE2 kernel exists to test");
+        set_simd_cap(before);
+        return;
+    }
+    // Euclidean only: the other metrics run the same out-of-line code in
+    // both copies.
+    eights_with_and_without_avx2::<2, 3>(Config { order: 3, ..Config::default() });
+    eights_with_and_without_avx2::<3, 1>(Config::default());
+    eights_with_and_without_avx2::<3, 4>(Config { order: 4, ..Config::default() });
+    eights_with_and_without_avx2::<4, 2>(Config { order: 2, ..Config::default() });
+    eights_with_and_without_avx2::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
+    eights_with_and_without_avx2::<3, 2>(Config { order: 2, mode: worley::Mode::Window, ..Config::default() });
+    eights_with_and_without_avx2::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
+    set_simd_cap(before);
+}
+
+/// The border's eight-lane calls of a default build with and without the
+/// AVX2 recompilation of its search (and of F1 before it), on the batches
+/// of [`eight_points`].
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+fn borders_with_and_without_avx2<const D: usize>(config: Config) {
+    let bits = |b: &worley::Border32<D>| (b.distance.to_bits(), b.normal.map(f32::to_bits), b.feature, b.neighbour);
+    let border = worley::SimdBorder::<D>::new(config).unwrap();
+    for batch in 0..1500 {
+        let points = eight_points::<D>(12, batch);
+        set_simd_cap(SimdCap::Sse2);
+        let plain = border.border8(&points);
+        set_simd_cap(SimdCap::Avx2);
+        let avx2 = border.border8(&points);
+        for i in 0..8 {
+            assert_eq!(bits(&plain.lane(i)), bits(&avx2.lane(i)), "{D}D batch {batch} lane {i}");
+        }
+    }
+}
+
+#[test]
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+fn the_border_s_avx2_recompilation_gives_the_sse2_bits() {
+    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
+    let before = set_simd_cap(SimdCap::Avx2);
+    if !runtime_avx2() {
+        eprintln!("this CPU has no AVX2: only the SSE2 border search exists to test");
+        set_simd_cap(before);
+        return;
+    }
+    borders_with_and_without_avx2::<2>(Config::default());
+    borders_with_and_without_avx2::<3>(Config::default());
+    borders_with_and_without_avx2::<4>(Config::default());
+    borders_with_and_without_avx2::<2>(Config { density: 0.5, ..Config::default() });
+    borders_with_and_without_avx2::<3>(Config { mode: worley::Mode::Window, density: 1.0, ..Config::default() });
     set_simd_cap(before);
 }
