@@ -40,8 +40,12 @@ fn bits<const D: usize, const N: usize>(v: &[Features32<D, N>]) -> Vec<u32> {
 /// the lowest one, and the ceiling decides the run-time choices.
 #[test]
 fn every_ceiling_gives_the_same_bits() {
-    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
-    let before = set_simd_cap(SimdCap::Sse2);
+    holding_the_ceiling(every_ceiling);
+}
+
+/// [`every_ceiling_gives_the_same_bits`], under the lock.
+fn every_ceiling() {
+    set_simd_cap(SimdCap::Sse2);
     assert!(!runtime_avx2() && !runtime_avx512(), "no run-time choice under an SSE2 ceiling");
     let points: Vec<[f64; 3]> =
         (0..3000).map(|i| std::array::from_fn(|a| (uniform(9, (3 * i + a) as u64) - 0.5) * 60.0)).collect();
@@ -70,7 +74,6 @@ fn every_ceiling_gives_the_same_bits() {
         assert_eq!(simd_cap(), cap);
         assert!(metrics.map(run) == lowest, "{cap:?} ({}) differs from SSE2", simd_level());
     }
-    set_simd_cap(before);
 }
 
 /// A slice at each ceiling (sixteen AVX-512 lanes chosen at run time where
@@ -101,23 +104,41 @@ fn slices_at_each_ceiling<const D: usize, const N: usize>(config: Config) {
     }
 }
 
+/// Runs `body` holding [`CAP`], then restores the ceiling it found.
+fn holding_the_ceiling(body: impl FnOnce()) {
+    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
+    let before = simd_cap();
+    body();
+    set_simd_cap(before);
+}
+
+/// `$check::<D, N>(config)` on each configuration the run-time copies are
+/// compared on: every dimension, orders 1 to 8, a sparse pattern, window
+/// mode and Worley's bump.
+#[cfg(not(target_feature = "avx512f"))]
+macro_rules! on_each_configuration {
+    ($check:ident) => {
+        $check::<2, 3>(Config { order: 3, ..Config::default() });
+        $check::<3, 1>(Config::default());
+        $check::<3, 2>(Config { order: 2, ..Config::default() });
+        $check::<3, 4>(Config { order: 4, ..Config::default() });
+        $check::<4, 2>(Config { order: 2, ..Config::default() });
+        $check::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
+        $check::<3, 2>(Config { order: 2, mode: worley::Mode::Window, ..Config::default() });
+        $check::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
+    };
+}
+
 #[test]
 #[cfg(not(target_feature = "avx512f"))]
 fn slices_give_the_one_point_bits_at_every_ceiling() {
-    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
-    let before = set_simd_cap(SimdCap::Avx512);
-    if !runtime_avx512() {
-        eprintln!("this CPU lacks AVX-512: the run-time sixteen lanes are not tested here");
-    }
-    slices_at_each_ceiling::<2, 3>(Config { order: 3, ..Config::default() });
-    slices_at_each_ceiling::<3, 1>(Config::default());
-    slices_at_each_ceiling::<3, 2>(Config { order: 2, ..Config::default() });
-    slices_at_each_ceiling::<3, 4>(Config { order: 4, ..Config::default() });
-    slices_at_each_ceiling::<4, 2>(Config { order: 2, ..Config::default() });
-    slices_at_each_ceiling::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
-    slices_at_each_ceiling::<3, 2>(Config { order: 2, mode: worley::Mode::Window, ..Config::default() });
-    slices_at_each_ceiling::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
-    set_simd_cap(before);
+    holding_the_ceiling(|| {
+        set_simd_cap(SimdCap::Avx512);
+        if !runtime_avx512() {
+            eprintln!("this CPU lacks AVX-512: the run-time sixteen lanes are not tested here");
+        }
+        on_each_configuration!(slices_at_each_ceiling);
+    });
 }
 
 /// Batch `batch` of eight points: ordinary points in even batches, points
@@ -133,83 +154,70 @@ fn eight_points<const D: usize>(seed: u64, batch: usize) -> [[f64; D]; 8] {
     points
 }
 
+/// `call` on the batches of [`eight_points`] under an SSE2 ceiling and
+/// under AVX2: the same lanes, compared as `call` gives them (bits).
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+fn with_and_without_avx2<const D: usize, T: PartialEq + std::fmt::Debug>(
+    seed: u64,
+    what: &str,
+    call: impl Fn(&[[f64; D]; 8]) -> [T; 8],
+) {
+    for batch in 0..1500 {
+        let points = eight_points::<D>(seed, batch);
+        set_simd_cap(SimdCap::Sse2);
+        let plain = call(&points);
+        set_simd_cap(SimdCap::Avx2);
+        let avx2 = call(&points);
+        for (i, (p, a)) in plain.iter().zip(&avx2).enumerate() {
+            assert_eq!(p, a, "{what}, batch {batch} lane {i}");
+        }
+    }
+}
+
 /// Eight-lane calls of a default build with and without the kernel's AVX2
-/// recompilation, on the batches of [`eight_points`]. An AVX2 build has no
-/// second copy.
+/// recompilation. An AVX2 build has no second copy.
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
 fn eights_with_and_without_avx2<const D: usize, const N: usize>(config: Config) {
     let bits = |f: &Features32<D, N>| (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id);
     for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
         let kernel = Simd::<D, N>::new(config, outputs).unwrap();
-        for batch in 0..1500 {
-            let points = eight_points::<D>(11, batch);
-            set_simd_cap(SimdCap::Sse2);
-            let plain = kernel.evaluate8(&points);
-            set_simd_cap(SimdCap::Avx2);
-            let avx2 = kernel.evaluate8(&points);
-            for i in 0..8 {
-                let what = format!("{D}D F{N} {outputs:?}, batch {batch} lane {i}");
-                assert_eq!(bits(&lane(&plain, i)), bits(&lane(&avx2, i)), "{what}");
-            }
-        }
+        with_and_without_avx2(11, &format!("{D}D F{N} {outputs:?}"), |points| {
+            let f = kernel.evaluate8(points);
+            std::array::from_fn(|i| bits(&lane(&f, i)))
+        });
     }
-}
-
-#[test]
-#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-fn the_avx2_recompilation_gives_the_sse2_bits() {
-    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
-    let before = set_simd_cap(SimdCap::Avx2);
-    if !runtime_avx2() {
-        eprintln!("this CPU has no AVX2: only the SSE2 kernel exists to test");
-        set_simd_cap(before);
-        return;
-    }
-    // Euclidean only: the other metrics run the same out-of-line code in
-    // both copies.
-    eights_with_and_without_avx2::<2, 3>(Config { order: 3, ..Config::default() });
-    eights_with_and_without_avx2::<3, 1>(Config::default());
-    eights_with_and_without_avx2::<3, 4>(Config { order: 4, ..Config::default() });
-    eights_with_and_without_avx2::<4, 2>(Config { order: 2, ..Config::default() });
-    eights_with_and_without_avx2::<2, 8>(Config { order: 8, density: 0.5, ..Config::default() });
-    eights_with_and_without_avx2::<3, 2>(Config { order: 2, mode: worley::Mode::Window, ..Config::default() });
-    eights_with_and_without_avx2::<3, 2>(Config { order: 2, bump: 0.5, ..Config::default() });
-    set_simd_cap(before);
 }
 
 /// The border's eight-lane calls of a default build with and without the
-/// AVX2 recompilation of its search (and of F1 before it), on the batches
-/// of [`eight_points`].
+/// AVX2 recompilation of its search (and of F1 before it).
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
 fn borders_with_and_without_avx2<const D: usize>(config: Config) {
     let bits = |b: &worley::Border32<D>| (b.distance.to_bits(), b.normal.map(f32::to_bits), b.feature, b.neighbour);
     let border = worley::SimdBorder::<D>::new(config).unwrap();
-    for batch in 0..1500 {
-        let points = eight_points::<D>(12, batch);
-        set_simd_cap(SimdCap::Sse2);
-        let plain = border.border8(&points);
-        set_simd_cap(SimdCap::Avx2);
-        let avx2 = border.border8(&points);
-        for i in 0..8 {
-            assert_eq!(bits(&plain.lane(i)), bits(&avx2.lane(i)), "{D}D batch {batch} lane {i}");
-        }
-    }
+    with_and_without_avx2(12, &format!("{D}D border"), |points| {
+        let b = border.border8(points);
+        std::array::from_fn(|i| bits(&b.lane(i)))
+    });
 }
 
+/// The kernel's and the border search's AVX2 recompilations in a default
+/// build give the bits of the code they stand in for.
 #[test]
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
-fn the_border_s_avx2_recompilation_gives_the_sse2_bits() {
-    let _held = CAP.lock().unwrap_or_else(|e| e.into_inner());
-    let before = set_simd_cap(SimdCap::Avx2);
-    if !runtime_avx2() {
-        eprintln!("this CPU has no AVX2: only the SSE2 border search exists to test");
-        set_simd_cap(before);
-        return;
-    }
-    borders_with_and_without_avx2::<2>(Config::default());
-    borders_with_and_without_avx2::<3>(Config::default());
-    borders_with_and_without_avx2::<4>(Config::default());
-    borders_with_and_without_avx2::<2>(Config { density: 0.5, ..Config::default() });
-    borders_with_and_without_avx2::<3>(Config { mode: worley::Mode::Window, density: 1.0, ..Config::default() });
-    set_simd_cap(before);
+fn the_avx2_recompilations_give_the_sse2_bits() {
+    holding_the_ceiling(|| {
+        set_simd_cap(SimdCap::Avx2);
+        if !runtime_avx2() {
+            eprintln!("this CPU has no AVX2: only the SSE2 kernel exists to test");
+            return;
+        }
+        // Euclidean only: the other metrics run the same out-of-line code
+        // in both copies.
+        on_each_configuration!(eights_with_and_without_avx2);
+        borders_with_and_without_avx2::<2>(Config::default());
+        borders_with_and_without_avx2::<3>(Config::default());
+        borders_with_and_without_avx2::<4>(Config::default());
+        borders_with_and_without_avx2::<2>(Config { density: 0.5, ..Config::default() });
+        borders_with_and_without_avx2::<3>(Config { mode: worley::Mode::Window, density: 1.0, ..Config::default() });
+    });
 }
