@@ -123,8 +123,8 @@
 //! becomes `vpmulld`, and VEX encodings drop register copies. Calling that
 //! function is one of the crate's two fenced `unsafe` operations, behind the
 //! CPU check; it took the default build's 3D F1 from 7.9 to 10.8 M
-//! samples/s on random points (one thread). `tests/lanes/levels.rs` keeps the two copies bit for bit
-//! equal.
+//! samples/s on random points (one thread). `tests/lanes/levels.rs` keeps
+//! the two copies bit for bit equal.
 //! The other metrics' kernels stay out of the copy and run the build's own
 //! instructions: copying all twelve kernels (four metrics, three output
 //! choices) doubled the optimised build of the crate, and the Euclidean
