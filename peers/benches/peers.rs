@@ -8,7 +8,8 @@
 //!   pixels at the bottom of the frame and less than one near the top
 //!   (see [`frame`]); `frame-shuffled` is the same points in a random order
 //!   (a bounce's hits), `frame-fine` the same at 8x the frequency (a
-//!   fractal's fourth octave).
+//!   fractal's fourth octave). Each frame has a border row too
+//!   (`SimdBorder::border_slice` on its hits), beside its F2 − F1.
 //!
 //! What each one computes (none of the peers is the same function):
 //! - `worley` F1 / F1F2: Poisson process, λ 5 per cell (the default), exact (certified
@@ -30,7 +31,9 @@
 //! this process prints the headline table: median M samples/s of 15 rounds
 //! after 3 unmeasured ones (a single call takes a millisecond or less, so
 //! the first rounds mostly measure a cold cache and a waking core),
-//! with the ratios of ours to the peers, and the build flags.
+//! with the ratios of ours to the peers, the time of the border, smooth
+//! F1 and the n-sphere radius as a multiple of worley's F2 − F1 on the same
+//! workload, and the build flags.
 //!
 //! Peers get frequency 0.55 (cell side ≈ 1.8 units, the same feature
 //! density as ours); simdnoise's grid, which steps by 1 per sample, gets
@@ -41,7 +44,9 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use simdnoise::Cell2ReturnType;
 use std::hint::black_box;
 use std::time::Instant;
-use worley::{Config, Features32, Grid, NSphere32, Outputs, Simd, SimdBorder, SimdNSphere, SimdSmooth, Smooth32};
+use worley::{
+    Border32, Config, Features32, Grid, NSphere32, Outputs, Simd, SimdBorder, SimdNSphere, SimdSmooth, Smooth32,
+};
 use worley_harness::sample_point;
 
 const RANDOM: usize = 1 << 18;
@@ -367,6 +372,7 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
     let mut frame_floor: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
     let mut frame_moves: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
     let mut frame_windows: Vec<Vec<Features32<3, 1>>> = (0..3).map(|_| slice_out[..1].repeat(m)).collect();
+    let mut frame_border: Vec<Vec<Border32<3>>> = (0..3).map(|_| border_r[..1].repeat(m)).collect();
     let mut smooth_g: Vec<Vec<Smooth32<3>>> = (0..2).map(|_| vec![Smooth32::INVALID; n]).collect();
     let mut smooth_r: Vec<Vec<Smooth32<3>>> = (0..2).map(|_| vec![Smooth32::INVALID; random.len()]).collect();
     let (mut spheres_g, mut spheres_r) = (vec![NSphere32::INVALID; n], vec![NSphere32::INVALID; random.len()]);
@@ -553,13 +559,13 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         random.len(),
         Box::new(|| spheres.n_sphere_slice(black_box(random), &mut spheres_r).unwrap()),
     );
-    let names: [[&'static str; 2]; 3] = [
-        ["frame F1", "frame F2−F1"],
-        ["frame-shuffled F1", "frame-shuffled F2−F1"],
-        ["frame-fine F1", "frame-fine F2−F1"],
+    let names: [[&'static str; 3]; 3] = [
+        ["frame F1", "frame F2−F1", "frame border"],
+        ["frame-shuffled F1", "frame-shuffled F2−F1", "frame-shuffled border"],
+        ["frame-fine F1", "frame-fine F2−F1", "frame-fine border"],
     ];
     let simd_ok = simdnoise_points(&frame_axes[0], &mut frame_out[0].1, false);
-    for (k, (((((((xs, (q, s1, s2)), o1f), o2f), cr), floor_out), moves_out), windows_out)) in frame_axes
+    for (k, ((((((((xs, (q, s1, s2)), o1f), o2f), cr), floor_out), moves_out), windows_out), bf)) in frame_axes
         .iter()
         .zip(frame_out.iter_mut())
         .zip(frame_f1.iter_mut())
@@ -568,10 +574,11 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         .zip(frame_floor.iter_mut())
         .zip(frame_moves.iter_mut())
         .zip(frame_windows.iter_mut())
+        .zip(frame_border.iter_mut())
         .enumerate()
     {
         let pts: &[[f32; 3]] = &frames[k];
-        let [c1, c2] = names[k];
+        let [c1, c2, c3] = names[k];
         add(&mut entries, "quick-noise 0.3 F1", c1, m, Box::new(move || quick(xs, q)));
         if simd_ok {
             let peers = [("simdnoise 3.1 F1", c1, false, s1), ("simdnoise 3.1 F2−F1", c2, true, s2)];
@@ -634,6 +641,14 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
                 black_box(&cr);
             }),
         );
+        let border = &border;
+        add(
+            &mut entries,
+            "worley SimdBorder border_slice",
+            c3,
+            m,
+            Box::new(move || border.border_slice(black_box(pts), bf).unwrap()),
+        );
     }
     for round in 0..3 + 15 {
         for e in entries.iter_mut() {
@@ -665,8 +680,8 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
         std::env::var("WORLEY_SIMD").unwrap_or_default(),
         worley::simd_level()
     );
-    println!("| case | contestant | M samples/s | / quick-noise F1 | / simdnoise |");
-    println!("|---|---|---|---|---|");
+    println!("| case | contestant | M samples/s | / quick-noise F1 | / simdnoise | time / worley F2−F1 |");
+    println!("|---|---|---|---|---|---|");
     for (name, case, rate) in &medians {
         // The peers run in 3D only: the 2D and 4D rows have no ratio.
         // Ratios within a workload (the case's first word): F1 against the
@@ -680,7 +695,17 @@ fn headline(random: &[[f32; 3]], grid: &[[f32; 3]]) {
             _ => None,
         };
         let ratio = |r: Option<f64>| r.map_or("".to_string(), |r| format!("{:.2}", rate / r));
-        println!("| {case} | {name} | {rate:.1} | {} | {} |", ratio(quick_ref), ratio(simd_ref));
+        // The border, smooth F1 and the n-sphere radius beside worley's own
+        // F2 − F1 on the same workload: how many times its time they take.
+        let derived = matches!(what, "border" | "n-sphere") || what.starts_with("smooth");
+        let f2_case = format!("{workload} F2−F1");
+        let own = derived
+            .then(|| {
+                of("worley evaluate_grid_distances F2−F1", &f2_case).or(of("worley evaluate_slice F2−F1", &f2_case))
+            })
+            .flatten();
+        let times = own.map_or("".to_string(), |f2| format!("{:.2}×", f2 / rate));
+        println!("| {case} | {name} | {rate:.1} | {} | {} | {times} |", ratio(quick_ref), ratio(simd_ref));
     }
 }
 
