@@ -26,6 +26,12 @@ fn sample_point<const D: usize>(seed: u64, i: usize, range: f64) -> [f64; D] {
     std::array::from_fn(|a| (2.0 * uniform(seed, (i * D + a) as u64) - 1.0) * range)
 }
 
+/// One result's distances, deltas and IDs as bits.
+#[cfg(not(target_feature = "avx512f"))]
+fn one_bits<const D: usize, const N: usize>(f: &Features32<D, N>) -> ([u32; N], [[u32; D]; N], [u32; N]) {
+    (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id)
+}
+
 fn bits<const D: usize, const N: usize>(v: &[Features32<D, N>]) -> Vec<u32> {
     v.iter()
         .flat_map(|f| {
@@ -89,7 +95,6 @@ fn slices_at_each_ceiling<const D: usize, const N: usize>(config: Config) {
     for (i, bad) in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1.0e300].into_iter().enumerate() {
         points[97 * i + 5][i % D] = bad;
     }
-    let bits = |f: &Features32<D, N>| (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id);
     for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
         let kernel = Simd::<D, N>::new(config, outputs).unwrap();
         let one: Vec<_> = points.iter().map(|p| kernel.evaluate(*p)).collect();
@@ -98,7 +103,11 @@ fn slices_at_each_ceiling<const D: usize, const N: usize>(config: Config) {
             let mut slice = vec![one[0]; points.len()];
             kernel.evaluate_slice(&points, &mut slice).unwrap();
             for (i, p) in points.iter().enumerate() {
-                assert_eq!(bits(&slice[i]), bits(&one[i]), "{D}D F{N} {outputs:?} under {cap:?}, point {i} {p:?}");
+                assert_eq!(
+                    one_bits(&slice[i]),
+                    one_bits(&one[i]),
+                    "{D}D F{N} {outputs:?} under {cap:?}, point {i} {p:?}"
+                );
             }
         }
     }
@@ -178,12 +187,20 @@ fn with_and_without_avx2<const D: usize, T: PartialEq + std::fmt::Debug>(
 /// recompilation. An AVX2 build has no second copy.
 #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
 fn eights_with_and_without_avx2<const D: usize, const N: usize>(config: Config) {
-    let bits = |f: &Features32<D, N>| (f.distance.map(f32::to_bits), f.delta.map(|d| d.map(f32::to_bits)), f.id);
     for outputs in [Outputs::Distances, Outputs::Ids, Outputs::IdsAndDeltas] {
         let kernel = Simd::<D, N>::new(config, outputs).unwrap();
+        // The batches must reach the lane-wise locate: a lane NaN or beyond
+        // its fast range of cells (2^31 − 3) in at least 700 of them.
+        let scale = kernel.pattern().scale();
+        let lanewise = (0..1500)
+            .filter(|&b| {
+                eight_points::<D>(11, b).iter().flatten().any(|x| x.is_nan() || (x * scale).abs() >= 2_147_483_645.0)
+            })
+            .count();
+        assert!(lanewise >= 700, "{D}D: only {lanewise} of 1500 batches reach the lane-wise locate");
         with_and_without_avx2(11, &format!("{D}D F{N} {outputs:?}"), |points| {
             let f = kernel.evaluate8(points);
-            std::array::from_fn(|i| bits(&lane(&f, i)))
+            std::array::from_fn(|i| one_bits(&lane(&f, i)))
         });
     }
 }
